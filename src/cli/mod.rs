@@ -1,0 +1,53 @@
+//! The command line: one module per subcommand, each with its clap `Args` and `run`.
+
+mod pose;
+mod profile;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// Finds the moves in delta-printer G-code that ask a carriage motor for more force than
+/// it can give.
+#[derive(Parser, Debug)]
+#[command(name = "delta-gcode", version, about)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// The model at one nozzle state: carriages, their velocities and accelerations, forces.
+    Pose(pose::Args),
+    /// Validate a machine profile and print its derived figures.
+    Machine(profile::Args),
+}
+
+/// Exit code for a usage, input or profile error.
+pub const EXIT_ERROR: u8 = 2;
+
+pub fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            let _ = e.print();
+            return if e.use_stderr() {
+                ExitCode::from(EXIT_ERROR)
+            } else {
+                ExitCode::SUCCESS
+            };
+        }
+    };
+    let result = match &cli.command {
+        Command::Pose(args) => pose::run(args),
+        Command::Machine(args) => profile::run(args),
+    };
+    match result {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("delta-gcode: error: {e:#}");
+            ExitCode::from(EXIT_ERROR)
+        }
+    }
+}

@@ -1,0 +1,16 @@
+//! delta-gcode: plans slicer G-code the way Klipper does and runs the Lagrangian dynamic
+//! model of a prismatic delta robot over it, to find the force each carriage motor must give.
+//!
+//! Pipeline (one module per stage, joined only by plain data types):
+//! `gcode` (lines → [`gcode::Event`]) → `planner` ([`planner::PlannedMove`]) →
+//! `resample` ([`resample::Sample`]) → `delta` (forces) → `report` → `emit`.
+
+pub mod cli;
+pub mod delta;
+pub mod emit;
+pub mod gcode;
+pub mod machine;
+pub mod path;
+pub mod planner;
+pub mod report;
+pub mod resample;

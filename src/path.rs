@@ -1,0 +1,254 @@
+//! The geometry of one commanded segment: a straight line or a circular (optionally
+//! helical) arc, in nozzle coordinates of the bed frame, mm.
+//!
+//! A path is parameterised by u ∈ [0, 1]. The resampler steps u with the paper's Taylor
+//! step (eq. 19), which needs p(u), dp/du and d²p/du²; the planner needs the length, the end
+//! tangents (for junctions) and the smallest radius of curvature (for the v²/r ≤ a cap).
+
+use nalgebra::Vector3;
+
+/// A position, velocity or acceleration in the bed frame (mm, mm/s, mm/s²).
+pub type Vec3 = Vector3<f64>;
+
+/// A circular arc in the XY plane with a linear Z rise (a helix when `z_delta_mm` ≠ 0).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Arc {
+    /// Centre of the circle in XY, mm.
+    pub center_mm: [f64; 2],
+    /// Radius of the circle, mm (> 0).
+    pub radius_mm: f64,
+    /// Polar angle of the start point around the centre, rad.
+    pub start_angle_rad: f64,
+    /// Signed swept angle: positive counter-clockwise (G3), negative clockwise (G2).
+    pub sweep_rad: f64,
+    /// Z at the start, mm.
+    pub z_start_mm: f64,
+    /// Z rise over the whole arc, mm.
+    pub z_delta_mm: f64,
+}
+
+/// The geometry of one segment.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Path {
+    Line { start: Vec3, end: Vec3 },
+    Arc(Arc),
+}
+
+impl Path {
+    /// A straight segment from `start` to `end`.
+    pub fn line(start: Vec3, end: Vec3) -> Self {
+        Path::Line { start, end }
+    }
+
+    /// Position at parameter u ∈ [0, 1].
+    pub fn point(&self, u: f64) -> Vec3 {
+        match self {
+            Path::Line { start, end } => start + (end - start) * u,
+            Path::Arc(a) => {
+                let th = a.start_angle_rad + a.sweep_rad * u;
+                Vec3::new(
+                    a.center_mm[0] + a.radius_mm * th.cos(),
+                    a.center_mm[1] + a.radius_mm * th.sin(),
+                    a.z_start_mm + a.z_delta_mm * u,
+                )
+            }
+        }
+    }
+
+    /// First derivative dp/du.
+    pub fn d1(&self, u: f64) -> Vec3 {
+        match self {
+            Path::Line { start, end } => end - start,
+            Path::Arc(a) => {
+                let th = a.start_angle_rad + a.sweep_rad * u;
+                let w = a.sweep_rad * a.radius_mm;
+                Vec3::new(-w * th.sin(), w * th.cos(), a.z_delta_mm)
+            }
+        }
+    }
+
+    /// Second derivative d²p/du².
+    pub fn d2(&self, u: f64) -> Vec3 {
+        match self {
+            Path::Line { .. } => Vec3::zeros(),
+            Path::Arc(a) => {
+                let th = a.start_angle_rad + a.sweep_rad * u;
+                let w2 = a.sweep_rad * a.sweep_rad * a.radius_mm;
+                Vec3::new(-w2 * th.cos(), -w2 * th.sin(), 0.0)
+            }
+        }
+    }
+
+    pub fn start(&self) -> Vec3 {
+        self.point(0.0)
+    }
+
+    pub fn end(&self) -> Vec3 {
+        match self {
+            Path::Line { end, .. } => *end,
+            Path::Arc(_) => self.point(1.0),
+        }
+    }
+
+    /// Arc length, mm. For both kinds |dp/du| is constant, so length = |dp/du|.
+    pub fn length_mm(&self) -> f64 {
+        self.d1(0.0).norm()
+    }
+
+    /// Unit tangent at the start (zero for a zero-length path).
+    pub fn start_dir(&self) -> Vec3 {
+        unit(self.d1(0.0))
+    }
+
+    /// Unit tangent at the end (zero for a zero-length path).
+    pub fn end_dir(&self) -> Vec3 {
+        unit(self.d1(1.0))
+    }
+
+    /// Smallest radius of curvature along the path, mm (infinite for a line).
+    /// For a helix of radius r, swept angle θ and rise h: r + h²/(r·θ²).
+    pub fn min_radius_mm(&self) -> f64 {
+        match self {
+            Path::Line { .. } => f64::INFINITY,
+            Path::Arc(a) => {
+                let th2 = a.sweep_rad * a.sweep_rad;
+                if th2 == 0.0 {
+                    f64::INFINITY
+                } else {
+                    a.radius_mm + a.z_delta_mm * a.z_delta_mm / (a.radius_mm * th2)
+                }
+            }
+        }
+    }
+
+    /// Largest distance of the path from the Z axis, squared (mm²): the planner's and the
+    /// report's "outside the print radius" test.
+    pub fn max_xy2_mm2(&self) -> f64 {
+        let xy2 = |p: Vec3| p.x * p.x + p.y * p.y;
+        match self {
+            Path::Line { start, end } => xy2(*start).max(xy2(*end)),
+            Path::Arc(a) => {
+                let c = a.center_mm[0].hypot(a.center_mm[1]);
+                // The farthest point of the full circle lies at the centre's polar angle;
+                // it counts only when the arc sweeps over it.
+                let far = a.center_mm[1].atan2(a.center_mm[0]);
+                let ends = xy2(self.start()).max(xy2(self.end()));
+                if c > 0.0 && sweeps_over(a, far) {
+                    ends.max((c + a.radius_mm).powi(2))
+                } else if c == 0.0 {
+                    a.radius_mm * a.radius_mm
+                } else {
+                    ends
+                }
+            }
+        }
+    }
+}
+
+fn unit(v: Vec3) -> Vec3 {
+    let n = v.norm();
+    if n > 0.0 { v / n } else { Vec3::zeros() }
+}
+
+/// Whether the arc passes through polar angle `angle` (about its own centre).
+fn sweeps_over(a: &Arc, angle: f64) -> bool {
+    use std::f64::consts::TAU;
+    if a.sweep_rad.abs() >= TAU {
+        return true;
+    }
+    let rel = (angle - a.start_angle_rad).rem_euclid(TAU);
+    if a.sweep_rad >= 0.0 {
+        rel <= a.sweep_rad
+    } else {
+        TAU - rel <= -a.sweep_rad || rel == 0.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::f64::consts::{FRAC_PI_2, PI};
+
+    fn helix() -> Path {
+        Path::Arc(Arc {
+            center_mm: [10.0, -5.0],
+            radius_mm: 20.0,
+            start_angle_rad: 0.3,
+            sweep_rad: -1.7 * PI,
+            z_start_mm: 0.2,
+            z_delta_mm: 3.0,
+        })
+    }
+
+    #[test]
+    fn derivatives_match_finite_differences() {
+        let p = helix();
+        let h = 1e-5;
+        for &u in &[0.0, 0.25, 0.6, 1.0] {
+            let fd1 = (p.point(u + h) - p.point(u - h)) / (2.0 * h);
+            let fd2 = (p.point(u + h) - 2.0 * p.point(u) + p.point(u - h)) / (h * h);
+            assert!((fd1 - p.d1(u)).norm() < 1e-6 * p.d1(u).norm(), "d1 at {u}");
+            assert!(
+                (fd2 - p.d2(u)).norm() < 1e-3,
+                "d2 at {u}: {fd2} vs {}",
+                p.d2(u)
+            );
+        }
+    }
+
+    #[test]
+    fn arc_length_matches_polyline() {
+        let p = helix();
+        let n = 20_000;
+        let poly: f64 = (0..n)
+            .map(|i| (p.point((i + 1) as f64 / n as f64) - p.point(i as f64 / n as f64)).norm())
+            .sum();
+        assert!((poly - p.length_mm()).abs() < 1e-6 * poly);
+    }
+
+    #[test]
+    fn helix_curvature_radius_matches_formula() {
+        // κ = |p' × p''| / |p'|³; radius = 1/κ.
+        let p = helix();
+        let (d1, d2) = (p.d1(0.4), p.d2(0.4));
+        let r = d1.norm().powi(3) / d1.cross(&d2).norm();
+        assert!((r - p.min_radius_mm()).abs() < 1e-9 * r);
+    }
+
+    #[test]
+    fn max_radius_of_arc_through_far_side() {
+        // Quarter circle around (10, 0), radius 5, from angle -45° to +45°: passes angle 0,
+        // the point (15, 0).
+        let a = Path::Arc(Arc {
+            center_mm: [10.0, 0.0],
+            radius_mm: 5.0,
+            start_angle_rad: -FRAC_PI_2 / 2.0,
+            sweep_rad: FRAC_PI_2,
+            z_start_mm: 0.0,
+            z_delta_mm: 0.0,
+        });
+        assert!((a.max_xy2_mm2() - 225.0).abs() < 1e-9);
+        // The same arc clockwise from +45° to -45° passes it too.
+        let b = Path::Arc(Arc {
+            start_angle_rad: FRAC_PI_2 / 2.0,
+            sweep_rad: -FRAC_PI_2,
+            ..match a {
+                Path::Arc(a) => a,
+                Path::Line { .. } => unreachable!(),
+            }
+        });
+        assert!((b.max_xy2_mm2() - 225.0).abs() < 1e-9);
+        // The far side (angle π) is not swept: the largest radius is at an end.
+        let l = Path::line(Vec3::new(3.0, 4.0, 0.0), Vec3::new(0.0, 1.0, 0.0));
+        assert_eq!(l.max_xy2_mm2(), 25.0);
+    }
+
+    #[test]
+    fn tangents() {
+        let l = Path::line(Vec3::zeros(), Vec3::new(3.0, 4.0, 0.0));
+        assert!((l.start_dir() - Vec3::new(0.6, 0.8, 0.0)).norm() < 1e-15);
+        let z = Path::line(Vec3::zeros(), Vec3::zeros());
+        assert_eq!(z.start_dir(), Vec3::zeros());
+        assert_eq!(z.length_mm(), 0.0);
+    }
+}

@@ -1,0 +1,1 @@
+//! Per-move statistics and the report, with its text, JSON and GitHub writers.

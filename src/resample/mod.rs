@@ -1,0 +1,27 @@
+//! The resampler: planned moves → samples on the global grid t = k·Ts (plus phase
+//! boundaries and junctions), position stepped with the paper's Taylor step (eq. 19).
+
+use crate::path::Vec3;
+
+/// Where in its move a sample lies.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Phase {
+    Accel,
+    Cruise,
+    Decel,
+    /// Within half a period of a junction, where the velocity impulse is spread.
+    Corner,
+}
+
+/// The nozzle's state at one instant (bed frame, mm, s).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    pub t_s: f64,
+    /// Source line of the move the sample belongs to.
+    pub line: u64,
+    pub phase: Phase,
+    pub pos_mm: Vec3,
+    pub vel_mm_s: Vec3,
+    pub acc_mm_s2: Vec3,
+}
