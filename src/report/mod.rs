@@ -1,1 +1,350 @@
-//! Per-move statistics and the report, with its text, JSON and GitHub writers.
+//! Per-move statistics and the report, with its text, JSON, GitHub and annotation writers.
+//! The writers only format a [`Report`]; they compute nothing.
+
+mod annotations;
+mod github;
+mod stats;
+mod text;
+
+pub use annotations::{annotations, summary_lines};
+pub use github::write_github;
+pub use stats::{MoveStats, Problem};
+pub use text::write_text;
+
+use serde::Serialize;
+
+use crate::gcode::{Diagnostic, Severity};
+use crate::resample::Phase;
+
+/// At most this many violations and diagnostics are kept in detail; all are counted.
+pub const MAX_LISTED: usize = 10_000;
+
+/// The outcome of checking one file: the JSON report of DESIGN.md.
+#[derive(Clone, Debug, Serialize)]
+pub struct Report {
+    pub file: String,
+    pub machine: String,
+    pub limit_force_n: f64,
+    pub summary: Summary,
+    pub violations: Vec<Violation>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub moves: Option<Vec<MoveEntry>>,
+    pub diagnostics: Vec<DiagnosticEntry>,
+}
+
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct Summary {
+    pub lines: u64,
+    pub moves: u64,
+    pub samples: u64,
+    pub print_time_s: f64,
+    pub peak_force_n: [f64; 3],
+    /// Line of each tower's peak.
+    pub peak_line: [u64; 3],
+    /// Moves over the force limit, unreachable, above home or outside the print radius.
+    pub violations: u64,
+    pub unreachable: u64,
+    pub max_energy_residual_w: f64,
+    pub warnings: u64,
+    pub errors: u64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct Violation {
+    pub line: u64,
+    /// `force`, `unreachable`, `above_home` or `outside_radius`.
+    pub kind: &'static str,
+    pub peak_force_n: [f64; 3],
+    /// 1-based tower (1 = A) of the worst force, or of the problem.
+    pub tower: usize,
+    pub t_s: f64,
+    pub phase: Phase,
+    pub message: String,
+    /// The G-code line itself, filled in by [`Report::set_commands`].
+    #[serde(skip_serializing_if = "String::is_empty")]
+    pub command: String,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct MoveEntry {
+    pub line: u64,
+    pub peak_force_n: [f64; 3],
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct DiagnosticEntry {
+    pub line: u64,
+    pub column: u32,
+    pub severity: &'static str,
+    pub message: String,
+}
+
+/// Tower letters, A B C, for 0-based tower indices.
+pub const TOWERS: [char; 3] = ['A', 'B', 'C'];
+
+impl Report {
+    pub fn new(file: &str, machine: &str, limit_force_n: f64, all_moves: bool) -> Self {
+        Report {
+            file: file.to_string(),
+            machine: machine.to_string(),
+            limit_force_n,
+            summary: Summary::default(),
+            violations: Vec::new(),
+            moves: all_moves.then(Vec::new),
+            diagnostics: Vec::new(),
+        }
+    }
+
+    /// Takes one move's statistics, in file order.
+    pub fn add_move(&mut self, m: &MoveStats) {
+        let s = &mut self.summary;
+        s.moves += 1;
+        s.samples += m.samples;
+        s.max_energy_residual_w = s.max_energy_residual_w.max(m.max_energy_residual_w);
+        for i in 0..3 {
+            if m.peak_force_n[i] > s.peak_force_n[i] {
+                s.peak_force_n[i] = m.peak_force_n[i];
+                s.peak_line[i] = m.line;
+            }
+        }
+        if let Some(moves) = &mut self.moves {
+            moves.push(MoveEntry {
+                line: m.line,
+                peak_force_n: m.peak_force_n,
+            });
+        }
+        if let Some(v) = self.violation_of(m) {
+            self.summary.violations += 1;
+            if v.kind == "unreachable" {
+                self.summary.unreachable += 1;
+            }
+            if self.violations.len() < MAX_LISTED {
+                self.violations.push(v);
+            }
+        }
+    }
+
+    fn violation_of(&self, m: &MoveStats) -> Option<Violation> {
+        let worst = m.worst_tower();
+        let fmt_forces = format_forces(&m.peak_force_n);
+        let (kind, tower, t_s, message) = match &m.problem {
+            Some(
+                p @ Problem::Unreachable {
+                    t_s,
+                    tower,
+                    pos_mm,
+                    reason,
+                },
+            ) => (
+                p.kind(),
+                *tower,
+                *t_s,
+                format!(
+                    "UNREACHABLE tower {}: {reason} at X{:.3} Y{:.3} Z{:.3}",
+                    TOWERS[*tower], pos_mm[0], pos_mm[1], pos_mm[2]
+                ),
+            ),
+            Some(
+                p @ Problem::AboveHome {
+                    t_s,
+                    tower,
+                    q_mm,
+                    home_mm,
+                },
+            ) => (
+                p.kind(),
+                *tower,
+                *t_s,
+                format!(
+                    "ABOVE HOME tower {}: carriage at {q_mm:.3} mm > home {home_mm:.3} mm",
+                    TOWERS[*tower]
+                ),
+            ),
+            Some(
+                p @ Problem::OutsideRadius {
+                    radius_mm,
+                    limit_mm,
+                },
+            ) => (
+                p.kind(),
+                worst,
+                m.peak_t_s[worst],
+                format!("OUTSIDE print radius: {radius_mm:.2} mm > {limit_mm:.2} mm"),
+            ),
+            None if m.peak_n() > self.limit_force_n => (
+                "force",
+                worst,
+                m.peak_t_s[worst],
+                format!("OVER force {fmt_forces} N > {:.1} N", self.limit_force_n),
+            ),
+            None => return None,
+        };
+        let phase = m.peak_phase[worst];
+        Some(Violation {
+            line: m.line,
+            kind,
+            peak_force_n: m.peak_force_n,
+            tower: tower + 1,
+            t_s,
+            phase,
+            message,
+            command: String::new(),
+        })
+    }
+
+    pub fn add_diagnostic(&mut self, d: &Diagnostic) {
+        match d.severity {
+            Severity::Warning => self.summary.warnings += 1,
+            Severity::Error => self.summary.errors += 1,
+        }
+        if self.diagnostics.len() < MAX_LISTED {
+            self.diagnostics.push(DiagnosticEntry {
+                line: d.line,
+                column: d.column,
+                severity: match d.severity {
+                    Severity::Warning => "warning",
+                    Severity::Error => "error",
+                },
+                message: d.message.clone(),
+            });
+        }
+    }
+
+    /// Lines of the listed violations, to look up their text.
+    pub fn violation_lines(&self) -> Vec<u64> {
+        self.violations.iter().map(|v| v.line).collect()
+    }
+
+    /// Fills in each violation's G-code text; `lookup` gives a line's text by number.
+    pub fn set_commands(&mut self, mut lookup: impl FnMut(u64) -> Option<String>) {
+        for v in &mut self.violations {
+            if let Some(text) = lookup(v.line) {
+                v.command = text;
+            }
+        }
+    }
+
+    /// Whether anything exceeded a limit or could not be reached.
+    pub fn failed(&self) -> bool {
+        self.summary.violations > 0
+    }
+
+    /// The violations, worst first: problems before forces, then by force / limit.
+    pub fn worst_first(&self) -> Vec<&Violation> {
+        let mut v: Vec<&Violation> = self.violations.iter().collect();
+        let key = |v: &Violation| {
+            if v.kind == "force" {
+                v.peak_force_n.iter().fold(0.0_f64, |a, b| a.max(*b))
+            } else {
+                f64::INFINITY
+            }
+        };
+        v.sort_by(|a, b| key(b).total_cmp(&key(a)).then(a.line.cmp(&b.line)));
+        v
+    }
+}
+
+/// `31.2/12.0/9.8`
+pub fn format_forces(f: &[f64; 3]) -> String {
+    format!("{:.1}/{:.1}/{:.1}", f[0], f[1], f[2])
+}
+
+/// Several files' reports as JSON: one object for one file, an array for several.
+pub fn write_json(out: &mut impl std::io::Write, reports: &[Report]) -> std::io::Result<()> {
+    match reports {
+        [one] => serde_json::to_writer_pretty(&mut *out, one)?,
+        many => serde_json::to_writer_pretty(&mut *out, many)?,
+    }
+    writeln!(out)
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+
+    /// A report with one move within limits, one over, one unreachable.
+    pub(crate) fn sample_report() -> Report {
+        let mut r = Report::new("part.gcode", "Kossel", 30.0, true);
+        let mut ok = MoveStats::new(10);
+        ok.add(1.0, Phase::Cruise, [10.0, 11.0, 12.0], 1e-9);
+        let mut over = MoveStats::new(20);
+        over.add(2.5, Phase::Decel, [31.25, -12.0, 9.8], 2e-9);
+        let mut far = MoveStats::new(30);
+        far.add(3.0, Phase::Accel, [1.0, 1.0, 1.0], 0.0);
+        far.flag(Problem::Unreachable {
+            t_s: 3.0,
+            tower: 1,
+            pos_mm: [200.0, 0.0, 0.0],
+            reason: "arm too short".into(),
+        });
+        for m in [&ok, &over, &far] {
+            r.add_move(m);
+        }
+        r.summary.print_time_s = 3.5;
+        r.summary.lines = 40;
+        r
+    }
+
+    #[test]
+    fn summary_and_violations() {
+        let r = sample_report();
+        assert_eq!(r.summary.moves, 3);
+        assert_eq!(r.summary.samples, 3);
+        assert_eq!(r.summary.violations, 2);
+        assert_eq!(r.summary.unreachable, 1);
+        assert_eq!(r.summary.peak_force_n, [31.25, 12.0, 12.0]);
+        assert_eq!(r.summary.peak_line, [20, 20, 10]);
+        assert_eq!(r.violations[0].kind, "force");
+        assert_eq!(r.violations[0].tower, 1);
+        assert_eq!(
+            r.violations[0].message,
+            "OVER force 31.2/12.0/9.8 N > 30.0 N"
+        );
+        assert_eq!(r.violations[1].kind, "unreachable");
+        assert_eq!(r.violations[1].tower, 2);
+        assert!(r.failed());
+        let worst: Vec<u64> = r.worst_first().iter().map(|v| v.line).collect();
+        assert_eq!(worst, [30, 20]);
+    }
+
+    #[test]
+    fn json_has_the_design_schema() {
+        let r = sample_report();
+        let mut buf = Vec::new();
+        write_json(&mut buf, std::slice::from_ref(&r)).unwrap();
+        let v: serde_json::Value = serde_json::from_slice(&buf).unwrap();
+        for key in [
+            "file",
+            "machine",
+            "limit_force_n",
+            "summary",
+            "violations",
+            "moves",
+        ] {
+            assert!(v.get(key).is_some(), "{key}");
+        }
+        for key in [
+            "lines",
+            "moves",
+            "samples",
+            "print_time_s",
+            "peak_force_n",
+            "violations",
+            "unreachable",
+            "max_energy_residual_w",
+        ] {
+            assert!(v["summary"].get(key).is_some(), "summary.{key}");
+        }
+        let viol = &v["violations"][0];
+        assert_eq!(viol["line"], 20);
+        assert_eq!(viol["kind"], "force");
+        assert_eq!(viol["tower"], 1);
+        assert_eq!(viol["phase"], "decel");
+        assert_eq!(viol["t_s"], 2.5);
+        assert_eq!(v["moves"].as_array().map(Vec::len), Some(3));
+        let mut two = Vec::new();
+        write_json(&mut two, &[r.clone(), r]).unwrap();
+        let arr: serde_json::Value = serde_json::from_slice(&two).unwrap();
+        assert_eq!(arr.as_array().map(Vec::len), Some(2));
+    }
+}

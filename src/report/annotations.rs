@@ -1,0 +1,86 @@
+//! The report as G-code comment lines: one after each flagged move, a block at the end.
+
+use std::collections::BTreeMap;
+
+use super::{Report, TOWERS, Violation, format_forces};
+
+/// Where and when a violation happened: `(tower A, decel, t=812.304 s)`.
+pub(super) fn context(v: &Violation) -> String {
+    let phase = serde_json::to_value(v.phase)
+        .ok()
+        .and_then(|p| p.as_str().map(str::to_string))
+        .unwrap_or_default();
+    format!("(tower {}, {phase}, t={:.3} s)", TOWERS[v.tower - 1], v.t_s)
+}
+
+/// The annotation lines to insert after each flagged input line.
+pub fn annotations(report: &Report) -> BTreeMap<u64, Vec<String>> {
+    let mut map: BTreeMap<u64, Vec<String>> = BTreeMap::new();
+    for v in &report.violations {
+        map.entry(v.line)
+            .or_default()
+            .push(format!("; delta-gcode: {} {}", v.message, context(v)));
+    }
+    map
+}
+
+/// The summary block written at the end of an annotated file.
+pub fn summary_lines(report: &Report) -> Vec<String> {
+    let s = &report.summary;
+    let mut lines = vec![
+        format!(
+            "; delta-gcode summary: machine {}, force limit {:.1} N",
+            report.machine, report.limit_force_n
+        ),
+        format!(
+            "; delta-gcode: print time {:.1} s, {} moves, {} samples",
+            s.print_time_s, s.moves, s.samples
+        ),
+        format!(
+            "; delta-gcode: peak force A/B/C {} N",
+            format_forces(&s.peak_force_n)
+        ),
+        format!(
+            "; delta-gcode: violations {} (unreachable {}), {} warnings, {} errors",
+            s.violations, s.unreachable, s.warnings, s.errors
+        ),
+    ];
+    if s.violations as usize > report.violations.len() {
+        lines.push(format!(
+            "; delta-gcode: only the first {} violations are annotated",
+            report.violations.len()
+        ));
+    }
+    lines.push(format!(
+        "; delta-gcode: result {}",
+        if report.failed() { "FAIL" } else { "OK" }
+    ));
+    lines
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::report::tests::sample_report;
+
+    #[test]
+    fn flagged_moves_get_the_design_format() {
+        let a = annotations(&sample_report());
+        assert_eq!(
+            a[&20],
+            ["; delta-gcode: OVER force 31.2/12.0/9.8 N > 30.0 N (tower A, decel, t=2.500 s)"]
+        );
+        assert!(a[&30][0].starts_with("; delta-gcode: UNREACHABLE tower B: arm too short"));
+        assert_eq!(a.len(), 2);
+    }
+
+    #[test]
+    fn summary_block_lines_are_ours() {
+        let lines = summary_lines(&sample_report());
+        assert!(lines.iter().all(|l| l.starts_with("; delta-gcode")));
+        assert_eq!(
+            lines.last().map(String::as_str),
+            Some("; delta-gcode: result FAIL")
+        );
+    }
+}

@@ -1,0 +1,144 @@
+//! Per-move statistics: the peak force on each tower and what went wrong, gathered sample
+//! by sample.
+
+use serde::Serialize;
+
+use crate::resample::Phase;
+
+/// Why a move cannot be run as planned (besides asking too much force).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Problem {
+    /// The pose is out of the arms' reach (eq. 6 has no real root).
+    Unreachable {
+        t_s: f64,
+        tower: usize,
+        pos_mm: [f64; 3],
+        reason: String,
+    },
+    /// A carriage would rise above its homed height.
+    AboveHome {
+        t_s: f64,
+        tower: usize,
+        q_mm: f64,
+        home_mm: f64,
+    },
+    /// The nozzle leaves the print disc.
+    OutsideRadius { radius_mm: f64, limit_mm: f64 },
+}
+
+impl Problem {
+    /// The `kind` of the JSON report's violation.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Problem::Unreachable { .. } => "unreachable",
+            Problem::AboveHome { .. } => "above_home",
+            Problem::OutsideRadius { .. } => "outside_radius",
+        }
+    }
+}
+
+/// What one move asked of the motors.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MoveStats {
+    /// 1-based source line.
+    pub line: u64,
+    pub samples: u64,
+    /// Largest |Q_i| per tower over the move's samples, N.
+    pub peak_force_n: [f64; 3],
+    /// When each tower's peak happened, s.
+    pub peak_t_s: [f64; 3],
+    pub peak_phase: [Phase; 3],
+    /// Largest |dE/dt − Σ Q_i q̇_i| over the move (eq. 20), W.
+    pub max_energy_residual_w: f64,
+    /// The first geometric problem found, if any.
+    pub problem: Option<Problem>,
+}
+
+impl MoveStats {
+    pub fn new(line: u64) -> Self {
+        MoveStats {
+            line,
+            samples: 0,
+            peak_force_n: [0.0; 3],
+            peak_t_s: [0.0; 3],
+            peak_phase: [Phase::Cruise; 3],
+            max_energy_residual_w: 0.0,
+            problem: None,
+        }
+    }
+
+    /// Takes one evaluated sample into the peaks.
+    pub fn add(&mut self, t_s: f64, phase: Phase, force_n: [f64; 3], energy_residual_w: f64) {
+        self.samples += 1;
+        for (i, f) in force_n.iter().enumerate() {
+            if f.abs() > self.peak_force_n[i] {
+                self.peak_force_n[i] = f.abs();
+                self.peak_t_s[i] = t_s;
+                self.peak_phase[i] = phase;
+            }
+        }
+        self.max_energy_residual_w = self.max_energy_residual_w.max(energy_residual_w);
+    }
+
+    /// Records a problem; only the first one of a move is kept.
+    pub fn flag(&mut self, problem: Problem) {
+        if self.problem.is_none() {
+            self.problem = Some(problem);
+        }
+    }
+
+    /// The tower (0-based) with the largest peak.
+    pub fn worst_tower(&self) -> usize {
+        let p = self.peak_force_n;
+        if p[0] >= p[1] && p[0] >= p[2] {
+            0
+        } else if p[1] >= p[2] {
+            1
+        } else {
+            2
+        }
+    }
+
+    pub fn peak_n(&self) -> f64 {
+        self.peak_force_n[self.worst_tower()]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn peaks_keep_time_and_phase_of_the_largest_magnitude() {
+        let mut s = MoveStats::new(7);
+        s.add(0.0, Phase::Accel, [1.0, -5.0, 2.0], 1e-9);
+        s.add(0.001, Phase::Cruise, [-3.0, 4.0, 2.5], 3e-9);
+        s.add(0.002, Phase::Decel, [2.0, 1.0, -2.0], 0.0);
+        assert_eq!(s.samples, 3);
+        assert_eq!(s.peak_force_n, [3.0, 5.0, 2.5]);
+        assert_eq!(s.peak_t_s, [0.001, 0.0, 0.001]);
+        assert_eq!(s.peak_phase, [Phase::Cruise, Phase::Accel, Phase::Cruise]);
+        assert_eq!(s.worst_tower(), 1);
+        assert_eq!(s.max_energy_residual_w, 3e-9);
+    }
+
+    #[test]
+    fn only_the_first_problem_is_kept() {
+        let mut s = MoveStats::new(1);
+        s.flag(Problem::OutsideRadius {
+            radius_mm: 90.0,
+            limit_mm: 85.0,
+        });
+        s.flag(Problem::AboveHome {
+            t_s: 0.0,
+            tower: 0,
+            q_mm: 1.0,
+            home_mm: 0.0,
+        });
+        assert_eq!(
+            s.problem.as_ref().map(Problem::kind),
+            Some("outside_radius")
+        );
+    }
+}

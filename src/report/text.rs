@@ -1,0 +1,137 @@
+//! The report for a person: the verdict, the worst moves, then the totals.
+
+use std::io::{self, Write};
+
+use super::{Report, TOWERS, format_forces};
+
+/// How many of the worst moves the text report lists.
+const WORST_SHOWN: usize = 10;
+
+/// `1:02:03`
+fn clock(t_s: f64) -> String {
+    let t = t_s.max(0.0).round() as u64;
+    format!("{}:{:02}:{:02}", t / 3600, t / 60 % 60, t % 60)
+}
+
+pub fn write_text(out: &mut impl Write, report: &Report) -> io::Result<()> {
+    let s = &report.summary;
+    let limit = report.limit_force_n;
+    if report.failed() {
+        writeln!(
+            out,
+            "{}: FAIL, {} of {} moves exceed the limits of {} (force limit {limit:.1} N)",
+            report.file, s.violations, s.moves, report.machine
+        )?;
+    } else {
+        writeln!(
+            out,
+            "{}: OK, all {} moves within the limits of {} (force limit {limit:.1} N)",
+            report.file, s.moves, report.machine
+        )?;
+    }
+    let worst = report.worst_first();
+    if !worst.is_empty() {
+        writeln!(out)?;
+        writeln!(
+            out,
+            "  {:>8}  {:<15}  {:>9}  {:<6}  {:>10}  {}",
+            "line", "force A/B/C (N)", "margin", "phase", "t (s)", "problem / command"
+        )?;
+        for v in worst.iter().take(WORST_SHOWN) {
+            let phase = serde_json::to_value(v.phase)
+                .ok()
+                .and_then(|p| p.as_str().map(str::to_string))
+                .unwrap_or_default();
+            let (margin, what) = if v.kind == "force" {
+                let peak = v.peak_force_n[v.tower - 1];
+                (
+                    format!("{:+.1} N", limit - peak),
+                    format!("tower {}: {}", TOWERS[v.tower - 1], v.command.trim_end()),
+                )
+            } else {
+                (
+                    String::from("-"),
+                    format!("{}: {}", v.message, v.command.trim_end()),
+                )
+            };
+            writeln!(
+                out,
+                "  {:>8}  {:<15}  {:>9}  {:<6}  {:>10.3}  {}",
+                v.line,
+                format_forces(&v.peak_force_n),
+                margin,
+                phase,
+                v.t_s,
+                what
+            )?;
+        }
+        if worst.len() > WORST_SHOWN {
+            writeln!(out, "  … and {} more", s.violations as usize - WORST_SHOWN)?;
+        }
+    }
+    writeln!(out)?;
+    writeln!(
+        out,
+        "  print time    {} ({:.1} s), {} moves, {} samples, {} lines",
+        clock(s.print_time_s),
+        s.print_time_s,
+        s.moves,
+        s.samples,
+        s.lines
+    )?;
+    writeln!(
+        out,
+        "  peak force    A {:.1} N (line {}), B {:.1} N (line {}), C {:.1} N (line {}): {:.0}% of the limit",
+        s.peak_force_n[0],
+        s.peak_line[0],
+        s.peak_force_n[1],
+        s.peak_line[1],
+        s.peak_force_n[2],
+        s.peak_line[2],
+        100.0 * s.peak_force_n.iter().fold(0.0_f64, |a, b| a.max(*b)) / limit
+    )?;
+    writeln!(
+        out,
+        "  energy check  largest |dE/dt - sum Q*dq| = {:.2e} W (eq. 20)",
+        s.max_energy_residual_w
+    )?;
+    if s.warnings + s.errors > 0 {
+        writeln!(
+            out,
+            "  input         {} warnings, {} errors",
+            s.warnings, s.errors
+        )?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::report::tests::sample_report;
+
+    #[test]
+    fn worst_moves_then_totals() {
+        let mut r = sample_report();
+        r.set_commands(|line| (line == 20).then(|| "G1 X10 Y20 F9000".to_string()));
+        let mut buf = Vec::new();
+        write_text(&mut buf, &r).unwrap();
+        let text = String::from_utf8(buf).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        assert!(
+            lines[0].starts_with("part.gcode: FAIL, 2 of 3 moves"),
+            "{text}"
+        );
+        // The unreachable move first, then the force violation with its margin and command.
+        assert!(lines[3].trim_start().starts_with("30 "), "{text}");
+        assert!(lines[4].contains("-1.2 N"), "{text}");
+        assert!(lines[4].contains("tower A: G1 X10 Y20 F9000"), "{text}");
+        assert!(text.contains("print time    0:00:04 (3.5 s)"), "{text}");
+    }
+
+    #[test]
+    fn clock_format() {
+        assert_eq!(clock(3723.4), "1:02:03");
+        assert_eq!(clock(59.6), "0:01:00");
+    }
+}
