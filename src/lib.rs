@@ -5,6 +5,7 @@
 //! `gcode` (lines → [`gcode::Event`]) → `planner` ([`planner::PlannedMove`]) →
 //! `resample` ([`resample::Sample`]) → `delta` (forces) → `report` → `emit`.
 
+pub mod analysis;
 pub mod cli;
 pub mod delta;
 pub mod emit;

@@ -1,7 +1,12 @@
 //! The command line: one module per subcommand, each with its clap `Args` and `run`.
 
+mod annotate;
+mod check;
+mod common;
 mod pose;
 mod profile;
+mod replace;
+mod trace;
 
 use std::process::ExitCode;
 
@@ -18,6 +23,12 @@ pub struct Cli {
 
 #[derive(Subcommand, Debug)]
 pub enum Command {
+    /// Check G-code files: exit 0 within limits, 1 when a move exceeds one, 2 on errors.
+    Check(check::Args),
+    /// Write the analysis into the G-code (for slicer post-processing hooks).
+    Annotate(annotate::Args),
+    /// One CSV row per sample: nozzle and carriage motion, forces, power.
+    Trace(trace::Args),
     /// The model at one nozzle state: carriages, their velocities and accelerations, forces.
     Pose(pose::Args),
     /// Validate a machine profile and print its derived figures.
@@ -40,6 +51,9 @@ pub fn main() -> ExitCode {
         }
     };
     let result = match &cli.command {
+        Command::Check(args) => check::run(args),
+        Command::Annotate(args) => annotate::run(args),
+        Command::Trace(args) => trace::run(args),
         Command::Pose(args) => pose::run(args),
         Command::Machine(args) => profile::run(args),
     };

@@ -1,0 +1,241 @@
+//! The pipeline over one G-code stream: reader → interpreter → planner (sequential) →
+//! resampler + delta model + statistics (in parallel over batches of planned moves, results
+//! back in file order).
+
+use std::collections::{BTreeSet, HashMap};
+use std::fmt::Write as _;
+use std::fs::File;
+use std::io::{self, BufRead, BufReader, Read};
+use std::path::Path;
+
+use anyhow::Context;
+use indicatif::ProgressBar;
+use rayon::prelude::*;
+
+use crate::delta::DeltaModel;
+use crate::gcode::{self, Diagnostic, Event, ReadStats};
+use crate::machine::Machine;
+use crate::planner::{PlannedMove, Planner};
+use crate::report::{MoveStats, Problem, Report};
+use crate::resample::sample_move;
+
+/// Planned moves handed to the parallel stage at a time.
+const BATCH: usize = 4096;
+
+/// Tolerance on the home height and the print radius, mm: rounding in slicer output.
+const GEOMETRY_TOLERANCE_MM: f64 = 1e-3;
+
+/// What the model found for one planned move.
+pub struct MoveResult {
+    pub stats: MoveStats,
+    /// The move's rows of the trace CSV, when a trace was asked for.
+    pub trace: String,
+}
+
+/// Totals of one run, besides the per-move results.
+pub struct RunTotals {
+    pub read: ReadStats,
+    pub print_time_s: f64,
+}
+
+/// The columns of the trace CSV (DESIGN.md).
+pub const TRACE_HEADER: &str = "t_s,line,x_mm,y_mm,z_mm,vx_mm_s,vy_mm_s,vz_mm_s,ax_mm_s2,ay_mm_s2,az_mm_s2,q1_mm,q2_mm,q3_mm,dq1_mm_s,dq2_mm_s,dq3_mm_s,ddq1_mm_s2,ddq2_mm_s2,ddq3_mm_s2,f1_n,f2_n,f3_n,power_w,energy_rate_w";
+
+/// Runs the pipeline over `input`. `on_move` gets every planned move's result in file order,
+/// `on_diag` every diagnostic of the reader.
+pub fn run<R: Read>(
+    input: R,
+    machine: &Machine,
+    trace: bool,
+    mut on_move: impl FnMut(MoveResult),
+    on_diag: impl FnMut(Diagnostic),
+) -> io::Result<RunTotals> {
+    let mut stage = ModelStage::new(machine, trace);
+    let mut planner = Planner::new(machine);
+    let home = nalgebra::Vector3::new(0.0, 0.0, machine.geometry.home_z_mm);
+    let read = gcode::interpret(
+        input,
+        home,
+        |event: Event| {
+            planner.push(event, &mut stage.pending);
+            if stage.pending.len() > BATCH {
+                stage.process(false, &mut on_move);
+            }
+        },
+        on_diag,
+    )?;
+    planner.finish(&mut stage.pending);
+    stage.process(true, &mut on_move);
+    Ok(RunTotals { read, print_time_s: planner.print_time_s() })
+}
+
+/// The parallel stage: planned moves waiting for their model run.
+struct ModelStage<'m> {
+    machine: &'m Machine,
+    model: DeltaModel,
+    home_q_mm: [f64; 3],
+    trace: bool,
+    pending: Vec<PlannedMove>,
+    /// The last move processed: the previous move of the next batch's first.
+    prev: Option<PlannedMove>,
+}
+
+impl<'m> ModelStage<'m> {
+    fn new(machine: &'m Machine, trace: bool) -> Self {
+        let model = DeltaModel::new(machine);
+        let home_q_mm = model.home_carriages_mm();
+        ModelStage { machine, model, home_q_mm, trace, pending: Vec::new(), prev: None }
+    }
+
+    /// Runs the model over the pending moves. All but the last are run unless `last`: the
+    /// last one's junction with the move after it is not known yet.
+    fn process(&mut self, last: bool, on_move: &mut impl FnMut(MoveResult)) {
+        let n = if last { self.pending.len() } else { self.pending.len().saturating_sub(1) };
+        if n == 0 {
+            return;
+        }
+        let pending = &self.pending;
+        let prev = self.prev;
+        let results: Vec<MoveResult> = (0..n)
+            .into_par_iter()
+            .map(|i| {
+                let before = if i == 0 { prev.as_ref() } else { pending.get(i - 1) };
+                self.evaluate(before, &pending[i], pending.get(i + 1))
+            })
+            .collect();
+        results.into_iter().for_each(&mut *on_move);
+        self.prev = Some(self.pending[n - 1]);
+        self.pending.drain(..n);
+    }
+
+    /// Resamples one move and runs the delta model on every sample.
+    fn evaluate(
+        &self,
+        prev: Option<&PlannedMove>,
+        mv: &PlannedMove,
+        next: Option<&PlannedMove>,
+    ) -> MoveResult {
+        let mut stats = MoveStats::new(mv.line);
+        let mut trace = String::new();
+        let limit_mm = self.machine.geometry.print_radius_mm;
+        let radius_mm = mv.path.max_xy2_mm2().sqrt();
+        if radius_mm > limit_mm + GEOMETRY_TOLERANCE_MM {
+            stats.flag(Problem::OutsideRadius { radius_mm, limit_mm });
+        }
+        sample_move(prev, mv, next, self.machine.sampling.period_s, &mut |s| {
+            match self.model.evaluate(s.pos_mm, s.vel_mm_s, s.acc_mm_s2) {
+                Ok(st) => {
+                    stats.add(s.t_s, s.phase, st.force_n, (st.energy_rate_w - st.power_w).abs());
+                    for tower in 0..3 {
+                        if st.q_mm[tower] > self.home_q_mm[tower] + GEOMETRY_TOLERANCE_MM {
+                            stats.flag(Problem::AboveHome {
+                                t_s: s.t_s,
+                                tower,
+                                q_mm: st.q_mm[tower],
+                                home_mm: self.home_q_mm[tower],
+                            });
+                        }
+                    }
+                    if self.trace {
+                        let p = &s.pos_mm;
+                        let v = &s.vel_mm_s;
+                        let a = &s.acc_mm_s2;
+                        let (q, dq, ddq, f) = (st.q_mm, st.dq_mm_s, st.ddq_mm_s2, st.force_n);
+                        // Display of f64 is the shortest text that reads back to the same value.
+                        let _ = writeln!(
+                            trace,
+                            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+                            s.t_s, s.line, p.x, p.y, p.z, v.x, v.y, v.z, a.x, a.y, a.z,
+                            q[0], q[1], q[2], dq[0], dq[1], dq[2], ddq[0], ddq[1], ddq[2],
+                            f[0], f[1], f[2], st.power_w, st.energy_rate_w
+                        );
+                    }
+                }
+                Err(e) => stats.flag(Problem::Unreachable {
+                    t_s: s.t_s,
+                    tower: e.tower(),
+                    pos_mm: [s.pos_mm.x, s.pos_mm.y, s.pos_mm.z],
+                    reason: e.to_string(),
+                }),
+            }
+        });
+        MoveResult { stats, trace }
+    }
+}
+
+/// Checks one G-code file: the whole pipeline into a [`Report`], with the text of the
+/// flagged lines looked up afterwards. `progress` (a bar over the file's bytes) is optional.
+pub fn check_file(
+    path: &Path,
+    machine: &Machine,
+    all_moves: bool,
+    progress: Option<&ProgressBar>,
+) -> anyhow::Result<Report> {
+    let file = File::open(path).with_context(|| format!("cannot open {}", path.display()))?;
+    let name = path.display().to_string();
+    let mut report =
+        Report::new(&name, &machine.name, machine.motors.max_force_n, all_moves);
+    let mut diags = Vec::new();
+    let input = ProgressReader { inner: file, bar: progress };
+    let totals = run(
+        BufReader::with_capacity(1 << 16, input),
+        machine,
+        false,
+        |r| report.add_move(&r.stats),
+        |d| diags.push(d),
+    )
+    .with_context(|| format!("cannot read {name}"))?;
+    for d in &diags {
+        report.add_diagnostic(d);
+    }
+    report.summary.lines = totals.read.lines;
+    report.summary.print_time_s = totals.print_time_s;
+    let lines = report.violation_lines();
+    if !lines.is_empty() {
+        let texts = line_texts(path, &lines)
+            .with_context(|| format!("cannot read {name} again"))?;
+        report.set_commands(|line| texts.get(&line).cloned());
+    }
+    Ok(report)
+}
+
+/// The text of the given lines (1-based), trimmed of their terminator and shortened.
+fn line_texts(path: &Path, lines: &[u64]) -> io::Result<HashMap<u64, String>> {
+    const SHOWN: usize = 72;
+    let wanted: BTreeSet<u64> = lines.iter().copied().collect();
+    let Some(&last) = wanted.last() else { return Ok(HashMap::new()) };
+    let mut reader = BufReader::new(File::open(path)?);
+    let mut buf = Vec::new();
+    let mut texts = HashMap::new();
+    let mut n = 0;
+    while n < last {
+        buf.clear();
+        if reader.read_until(b'\n', &mut buf)? == 0 {
+            break;
+        }
+        n += 1;
+        if wanted.contains(&n) {
+            let text = String::from_utf8_lossy(&buf);
+            let text = text.trim_end();
+            let short: String = text.chars().take(SHOWN).collect();
+            texts.insert(n, if short.len() < text.len() { short + "…" } else { short });
+        }
+    }
+    Ok(texts)
+}
+
+/// A reader that advances a progress bar by the bytes it reads.
+struct ProgressReader<'a, R> {
+    inner: R,
+    bar: Option<&'a ProgressBar>,
+}
+
+impl<R: Read> Read for ProgressReader<'_, R> {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        if let Some(bar) = self.bar {
+            bar.inc(n as u64);
+        }
+        Ok(n)
+    }
+}

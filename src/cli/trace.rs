@@ -1,0 +1,56 @@
+//! `delta-gcode trace FILE --machine M.yaml -o trace.csv`: one CSV row per sample.
+
+use std::fs::File;
+use std::io::{BufReader, Write};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use anyhow::Context;
+
+use super::common::MachineArg;
+use super::replace::replace_file;
+use crate::analysis::{TRACE_HEADER, run as run_pipeline};
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// G-code file to trace
+    #[arg(value_name = "FILE")]
+    pub file: PathBuf,
+    #[command(flatten)]
+    pub machine: MachineArg,
+    /// CSV output; `-` for standard output
+    #[arg(long, short, value_name = "CSV")]
+    pub output: PathBuf,
+}
+
+pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
+    let machine = args.machine.load()?;
+    let write = |w: &mut dyn Write| -> std::io::Result<()> {
+        let input = BufReader::with_capacity(1 << 16, File::open(&args.file)?);
+        writeln!(w, "{TRACE_HEADER}")?;
+        let mut failure = Ok(());
+        run_pipeline(
+            input,
+            &machine,
+            true,
+            |r| {
+                if failure.is_ok() {
+                    failure = w.write_all(r.trace.as_bytes());
+                }
+            },
+            |d| {
+                eprintln!("{}:{}:{}: {}", args.file.display(), d.line, d.column, d.message);
+            },
+        )?;
+        failure
+    };
+    if args.output.as_os_str() == "-" {
+        let mut out = std::io::stdout().lock();
+        write(&mut out)?;
+        out.flush()?;
+    } else {
+        replace_file(&args.output, write)
+            .with_context(|| format!("tracing {}", args.file.display()))?;
+    }
+    Ok(ExitCode::SUCCESS)
+}
