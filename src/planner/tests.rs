@@ -206,6 +206,33 @@ fn square_corner_runs_at_square_corner_velocity() {
 }
 
 #[test]
+fn corner_uses_each_moves_own_accel() {
+    // max_z_accel 1500: the move (0,0,0)→(30,0,40) (d = 50, |dz| = 40) gets 1500·1.25 =
+    // 1875 mm/s²; its junction deviation is still 25(√2 − 1)/3000. At the 90° corner with
+    // an XY move, its own cap R_jd·jd·a = 25·1875/3000 = 15.625 binds (the XY move's is
+    // 25): v = √15.625 = 3.952847 mm/s, whichever side the Z move is on.
+    let mut mach = machine();
+    mach.limits.max_z_accel_mm_s2 = 1500.0;
+    let (m, _) = plan_with(
+        &mach,
+        &[
+            mv(1, line([0.0; 3], [30.0, 0.0, 40.0]), 0.0, 100.0),
+            mv(2, line([30.0, 0.0, 40.0], [30.0, 50.0, 40.0]), 0.0, 100.0),
+        ],
+    );
+    close(m[0].accel_mm_s2, 1875.0, "z accel");
+    close(m[0].end_v_mm_s, 3.952_847_075, "z move first");
+    let (m, _) = plan_with(
+        &mach,
+        &[
+            mv(1, line([0.0, -50.0, 0.0], [0.0, 0.0, 0.0]), 0.0, 100.0),
+            mv(2, line([0.0; 3], [30.0, 0.0, 40.0]), 0.0, 100.0),
+        ],
+    );
+    close(m[0].end_v_mm_s, 3.952_847_075, "z move second");
+}
+
+#[test]
 fn straight_continuation_keeps_full_speed() {
     // Two collinear 50 mm moves plan as one 100 mm move: 1.033333 s, 100 mm/s across.
     let (m, t) = plan(&[
