@@ -109,7 +109,7 @@ impl MoveLimits {
     }
 
     /// The move with all its limits, or `None` for a move that moves nothing (Klipper drops
-    /// it). A feed that is not a positive number is taken as unlimited (max_velocity caps it).
+    /// it) or has a non-finite coordinate (the G-code stage reports those). A feed that is not a positive number is taken as unlimited (max_velocity caps it).
     pub(super) fn queued_move(&self, m: &Move) -> Option<QueuedMove> {
         let t = &self.toolhead;
         let speed = if m.feed_mm_s > 0.0 && m.feed_mm_s.is_finite() {
@@ -118,6 +118,9 @@ impl MoveLimits {
             f64::INFINITY
         };
         let path_d = m.path.length_mm();
+        if !path_d.is_finite() || !m.e_mm.is_finite() {
+            return None;
+        }
         let kinematic = path_d >= MIN_KINEMATIC_D_MM;
         let (move_d, velocity, accel) = if kinematic {
             (path_d, speed.min(t.max_velocity_mm_s), t.max_accel_mm_s2)

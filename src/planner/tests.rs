@@ -655,3 +655,27 @@ fn queue_cap_bounds_a_ramp_that_never_peaks() {
     }
     assert!(capped.print_time_s() >= whole_t - 1e-9);
 }
+
+#[test]
+fn bad_numbers_never_give_nan() {
+    // A NaN coordinate or E is dropped; F 0 and a negative F mean "no F limit" (300 mm/s):
+    // 100 mm rest to rest at 300, a = 3000 (edge off): 0.1 s and 15 mm each end, 70 mm in
+    // 0.233333 s: 0.433333 s.
+    let mut mach = machine();
+    mach.limits.edge_slowdown = false;
+    let (m, t) = plan_with(
+        &mach,
+        &[
+            mv(1, line([0.0; 3], [f64::NAN, 0.0, 0.0]), 1.0, 100.0),
+            mv(2, line([0.0; 3], [10.0, 0.0, 0.0]), f64::NAN, 100.0),
+            mv(3, line([0.0; 3], [100.0, 0.0, 0.0]), 0.0, 0.0),
+            Event::Stop {
+                line: 4,
+                dwell_s: f64::NAN,
+            },
+            mv(5, line([100.0, 0.0, 0.0], [0.0; 3]), 0.0, -5.0),
+        ],
+    );
+    assert_eq!(m.iter().map(|m| m.line).collect::<Vec<_>>(), [3, 5]);
+    close(t, 2.0 * 0.433_333_333, "print time");
+}
