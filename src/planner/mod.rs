@@ -1,6 +1,20 @@
 //! Klipper's motion planner: speed limits, junction speeds, lookahead and trapezoids.
+//!
+//! It follows klippy/toolhead.py (`Move`, `LookAheadQueue`), klippy/kinematics/delta.py
+//! (`check_move`) and klippy/kinematics/extruder.py (`check_move`, `calc_junction`); the
+//! model and every deviation are in docs/planner.md.
 
+mod limits;
+mod queue;
+#[cfg(test)]
+mod tests;
+
+use crate::gcode::Event;
+use crate::machine::Machine;
 use crate::path::Path;
+
+use limits::MoveLimits;
+use queue::Lookahead;
 
 /// One move with its trapezoidal velocity profile along the path (mm, s).
 ///
@@ -32,4 +46,58 @@ impl PlannedMove {
     pub fn duration_s(&self) -> f64 {
         self.accel_t_s + self.cruise_t_s + self.decel_t_s
     }
+}
+
+/// The streaming planner: events in, in file order; planned moves out, in file order, as
+/// soon as no later move can change their plan.
+#[derive(Debug)]
+pub struct Planner {
+    limits: MoveLimits,
+    lookahead: Lookahead,
+}
+
+impl Planner {
+    pub fn new(machine: &Machine) -> Planner {
+        Planner {
+            limits: MoveLimits::new(machine),
+            lookahead: Lookahead::new(machine.extruder.instantaneous_corner_velocity_mm_s),
+        }
+    }
+
+    /// Takes the next event; appends to `out` the moves whose plan is now final.
+    pub fn push(&mut self, event: Event, out: &mut Vec<PlannedMove>) {
+        match event {
+            Event::Move(m) => {
+                if let Some(q) = self.limits.queued_move(&m) {
+                    self.lookahead.add(q, out);
+                }
+            }
+            Event::Stop { dwell_s, .. } => {
+                self.lookahead.flush_all(out);
+                if dwell_s.is_finite() && dwell_s > 0.0 {
+                    self.lookahead.print_time_s += dwell_s;
+                }
+            }
+            Event::Limits { change, .. } => self.limits.apply(&change),
+        }
+    }
+
+    /// End of the input: plans and appends every move still queued.
+    pub fn finish(&mut self, out: &mut Vec<PlannedMove>) {
+        self.lookahead.flush_all(out);
+    }
+
+    /// Print time of the moves handed on so far, dwells included, s.
+    pub fn print_time_s(&self) -> f64 {
+        self.lookahead.print_time_s
+    }
+
+    /// Moves waiting in the lookahead queue (at most [`Planner::MAX_QUEUE`]).
+    pub fn queued(&self) -> usize {
+        self.lookahead.len()
+    }
+
+    /// The lookahead queue's cap, moves: past it the older half is planned as if the
+    /// toolhead had to stop after the last queued move.
+    pub const MAX_QUEUE: usize = queue::DEFAULT_MAX_QUEUE;
 }

@@ -1,0 +1,231 @@
+//! The speed and acceleration limits of one move, as Klipper sets them before the lookahead:
+//! the toolhead's `Move.__init__` (klippy/toolhead.py), the delta kinematics' `check_move`
+//! (klippy/kinematics/delta.py), the extruder's `check_move` (klippy/kinematics/extruder.py),
+//! and, ours alone, the centripetal cap of a native arc.
+
+use crate::gcode::{LimitChange, Move};
+use crate::machine::Machine;
+use crate::path::Path;
+
+use super::queue::QueuedMove;
+
+/// Klipper treats a move whose XYZ length is below this as extrude-only (toolhead.py).
+const MIN_KINEMATIC_D_MM: f64 = 1e-9;
+/// The acceleration Klipper gives an extrude-only move before the extruder limits it.
+const EXTRUDE_ONLY_ACCEL_MM_S2: f64 = 99_999_999.9;
+/// delta.py `SLOW_RATIO`: moves are slowed where a carriage runs this many times faster
+/// than the nozzle (half speed), and twice that (quarter speed).
+const SLOW_RATIO: f64 = 3.0;
+
+/// The toolhead limits in force now; M204 / SET_VELOCITY_LIMIT change them for the moves
+/// that follow (toolhead.py `set_max_velocities`, `_calc_junction_deviation`).
+#[derive(Clone, Copy, Debug)]
+struct Toolhead {
+    max_velocity_mm_s: f64,
+    max_accel_mm_s2: f64,
+    square_corner_velocity_mm_s: f64,
+    minimum_cruise_ratio: f64,
+}
+
+impl Toolhead {
+    /// scv²·(√2 − 1)/max_accel: the deviation that makes a 90° corner's junction speed
+    /// equal to square_corner_velocity.
+    fn junction_deviation_mm(&self) -> f64 {
+        let scv = self.square_corner_velocity_mm_s;
+        scv * scv * (std::f64::consts::SQRT_2 - 1.0) / self.max_accel_mm_s2
+    }
+
+    /// The pseudo-acceleration of the minimum_cruise_ratio check.
+    fn mcr_pseudo_accel_mm_s2(&self) -> f64 {
+        self.max_accel_mm_s2 * (1.0 - self.minimum_cruise_ratio)
+    }
+}
+
+/// Everything fixed by the profile, plus the current toolhead limits.
+#[derive(Clone, Debug)]
+pub(super) struct MoveLimits {
+    toolhead: Toolhead,
+    /// The profile's max_velocity / max_accel: delta.py reads them once, at start-up.
+    config_velocity_mm_s: f64,
+    config_accel_mm_s2: f64,
+    max_z_velocity_mm_s: f64,
+    max_z_accel_mm_s2: f64,
+    /// Squared radii beyond which delta.py halves / quarters speed and accel; `None` when
+    /// `limits.edge_slowdown` is off.
+    edge_xy2_mm2: Option<(f64, f64)>,
+    max_e_velocity_mm_s: f64,
+    max_e_accel_mm_s2: f64,
+}
+
+impl MoveLimits {
+    pub(super) fn new(machine: &Machine) -> Self {
+        let l = &machine.limits;
+        let edge_xy2_mm2 = l.edge_slowdown.then(|| {
+            let slow = slow_radius_mm(machine, SLOW_RATIO);
+            let very_slow = slow_radius_mm(machine, 2.0 * SLOW_RATIO);
+            (slow * slow, very_slow * very_slow)
+        });
+        MoveLimits {
+            toolhead: Toolhead {
+                max_velocity_mm_s: l.max_velocity_mm_s,
+                max_accel_mm_s2: l.max_accel_mm_s2,
+                square_corner_velocity_mm_s: l.square_corner_velocity_mm_s,
+                minimum_cruise_ratio: l.minimum_cruise_ratio,
+            },
+            config_velocity_mm_s: l.max_velocity_mm_s,
+            config_accel_mm_s2: l.max_accel_mm_s2,
+            max_z_velocity_mm_s: l.max_z_velocity_mm_s,
+            max_z_accel_mm_s2: l.max_z_accel_mm_s2,
+            edge_xy2_mm2,
+            max_e_velocity_mm_s: machine.extruder.max_extrude_only_velocity_mm_s,
+            max_e_accel_mm_s2: machine.extruder.max_extrude_only_accel_mm_s2,
+        }
+    }
+
+    /// Applies an M204 / SET_VELOCITY_LIMIT. Values Klipper would reject (not finite,
+    /// velocity or accel ≤ 0, scv < 0, ratio outside [0, 1)) are ignored: the G-code stage
+    /// reports them.
+    pub(super) fn apply(&mut self, change: &LimitChange) {
+        let t = &mut self.toolhead;
+        let positive = |v: Option<f64>| v.filter(|x| x.is_finite() && *x > 0.0);
+        if let Some(v) = positive(change.velocity_mm_s) {
+            t.max_velocity_mm_s = v;
+        }
+        if let Some(a) = positive(change.accel_mm_s2) {
+            t.max_accel_mm_s2 = a;
+        }
+        if let Some(s) = change
+            .square_corner_velocity_mm_s
+            .filter(|x| x.is_finite() && *x >= 0.0)
+        {
+            t.square_corner_velocity_mm_s = s;
+        }
+        if let Some(r) = change
+            .minimum_cruise_ratio
+            .filter(|x| (0.0..1.0).contains(x))
+        {
+            t.minimum_cruise_ratio = r;
+        }
+    }
+
+    /// The move with all its limits, or `None` for a move that moves nothing (Klipper drops
+    /// it) or has a non-finite coordinate (the G-code stage reports those). A feed that is not a positive number is taken as unlimited (max_velocity caps it).
+    pub(super) fn queued_move(&self, m: &Move) -> Option<QueuedMove> {
+        let t = &self.toolhead;
+        let speed = if m.feed_mm_s > 0.0 && m.feed_mm_s.is_finite() {
+            m.feed_mm_s
+        } else {
+            f64::INFINITY
+        };
+        let path_d = m.path.length_mm();
+        if !path_d.is_finite() || !m.e_mm.is_finite() {
+            return None;
+        }
+        let kinematic = path_d >= MIN_KINEMATIC_D_MM;
+        let (move_d, velocity, accel) = if kinematic {
+            (path_d, speed.min(t.max_velocity_mm_s), t.max_accel_mm_s2)
+        } else {
+            // An extrude-only move: the extruder's limits below cap it.
+            (m.e_mm.abs(), speed, EXTRUDE_ONLY_ACCEL_MM_S2)
+        };
+        if move_d == 0.0 || !move_d.is_finite() {
+            return None;
+        }
+        let mut q = QueuedMove::new(
+            m,
+            kinematic,
+            move_d,
+            velocity,
+            accel,
+            t.junction_deviation_mm(),
+            t.mcr_pseudo_accel_mm_s2(),
+        );
+        if kinematic {
+            self.limit_delta(m, &mut q);
+        }
+        if m.e_mm != 0.0 {
+            self.limit_extruder(m, &mut q);
+        }
+        if kinematic {
+            // Native arc: v²/r ≤ accel along the whole arc (r = ∞ for a line).
+            let cap_v2 = q.accel_mm_s2 * m.path.min_radius_mm();
+            q.max_cruise_v2 = q.max_cruise_v2.min(cap_v2);
+        }
+        Some(q)
+    }
+
+    /// delta.py `check_move`: Z moves scaled to max_z_velocity / max_z_accel; half, then a
+    /// quarter, of the configured velocity and accel near the edge.
+    fn limit_delta(&self, m: &Move, q: &mut QueuedMove) {
+        let dz = (m.path.end().z - m.path.start().z).abs();
+        if dz > 0.0 {
+            let z_ratio = q.move_d_mm / dz;
+            q.limit_speed(
+                self.max_z_velocity_mm_s * z_ratio,
+                self.max_z_accel_mm_s2 * z_ratio,
+            );
+        }
+        if let Some((slow_xy2, very_slow_xy2)) = self.edge_xy2_mm2 {
+            let extreme_xy2 = m.path.max_xy2_mm2();
+            if extreme_xy2 > slow_xy2 {
+                let r = if extreme_xy2 > very_slow_xy2 {
+                    0.25
+                } else {
+                    0.5
+                };
+                q.limit_speed(self.config_velocity_mm_s * r, self.config_accel_mm_s2 * r);
+            }
+        }
+    }
+
+    /// extruder.py `check_move`: a move with no XY motion, or a retract, is capped at the
+    /// extrude-only limits divided by its |E|/length ratio.
+    fn limit_extruder(&self, m: &Move, q: &mut QueuedMove) {
+        let no_xy = !q.kinematic
+            || match m.path {
+                Path::Line { start, end } => start.x == end.x && start.y == end.y,
+                Path::Arc(a) => a.sweep_rad == 0.0 || a.radius_mm == 0.0,
+            };
+        if no_xy || q.e_ratio < 0.0 {
+            let inv = 1.0 / q.e_ratio.abs();
+            q.limit_speed(self.max_e_velocity_mm_s * inv, self.max_e_accel_mm_s2 * inv);
+        }
+    }
+}
+
+/// Radius (mm) beyond which a carriage of the delta can move `ratio` times faster than the
+/// nozzle: delta.py `ratio_to_xy` with a zero step distance, ratio·l/√(ratio² + 1) − R, for
+/// the shortest arm l and delta radius R. (Squared as delta.py squares it.)
+// TODO(lead): replace with the shared `Machine::slow_radius_mm`.
+fn slow_radius_mm(machine: &Machine, ratio: f64) -> f64 {
+    let g = &machine.geometry;
+    let min_arm = g
+        .arm_length_mm
+        .iter()
+        .copied()
+        .fold(f64::INFINITY, f64::min);
+    ratio * min_arm / (ratio * ratio + 1.0).sqrt() - g.delta_radius_mm
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::planner::tests::machine;
+
+    #[test]
+    fn slow_radii_of_a_kossel() {
+        // l = 215, R = 105: 3·215/√10 − 105 = 645/3.16227766 − 105 = 98.9669;
+        // 6·215/√37 − 105 = 1290/6.08276253 − 105 = 107.0747.
+        let m = machine();
+        assert!((slow_radius_mm(&m, 3.0) - 98.9669).abs() < 1e-4);
+        assert!((slow_radius_mm(&m, 6.0) - 107.0747).abs() < 1e-4);
+    }
+
+    #[test]
+    fn junction_deviation_of_defaults() {
+        // 5²·(√2 − 1)/3000 = 25·0.41421356/3000 = 0.00345178 mm.
+        let t = MoveLimits::new(&machine()).toolhead;
+        assert!((t.junction_deviation_mm() - 0.003_451_78).abs() < 1e-8);
+        assert_eq!(t.mcr_pseudo_accel_mm_s2(), 1500.0);
+    }
+}
