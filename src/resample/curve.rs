@@ -281,10 +281,10 @@ mod tests {
         let mut last_u = 0.0;
         let done = walk_constant_speed(&c, v, ts, 10_000_000, &mut |u| {
             let p = c.point(u);
-            if let Some(q) = prev {
-                if u < 1.0 {
-                    worst = worst.max(((p - q).norm() - v * ts).abs());
-                }
+            if let Some(q) = prev
+                && u < 1.0
+            {
+                worst = worst.max(((p - q).norm() - v * ts).abs());
             }
             prev = Some(p);
             n += 1;
