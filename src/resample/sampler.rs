@@ -562,6 +562,28 @@ mod tests {
                 }
                 let end = s.last().map_or(Vec3::zeros(), |x| x.pos_mm);
                 assert!((end - path.end()).norm() < 1e-9);
+                // Neighbours that stop before and start after it change nothing.
+                let before = planned(
+                    Path::line(path.start() - Vec3::new(0.0, 9.0, 0.0), path.start()),
+                    0.0,
+                    0.0,
+                    30.0,
+                    0.0,
+                    acc,
+                );
+                let before = PlannedMove {
+                    t0_s: mv.t0_s - before.duration_s(),
+                    ..before
+                };
+                let after = planned(
+                    Path::line(path.end(), path.end() + Vec3::new(7.0, 0.0, 1.0)),
+                    mv.t0_s + mv.duration_s(),
+                    0.0,
+                    40.0,
+                    0.0,
+                    acc,
+                );
+                assert_eq!(collect(Some(&before), &mv, Some(&after)), s);
             }
         }
     }
