@@ -129,6 +129,10 @@ fn end_velocity(m: &PlannedMove) -> Vec3 {
     }
 }
 
+/// A junction impulse smaller than this (as Δv/Ts) does not make a sample a `Corner`: the
+/// rounding of the tangents of two collinear moves gives Δv ~ 1e-14 mm/s.
+const CORNER_MIN_MM_S2: f64 = 1e-6;
+
 /// One phase of the trapezoid: it starts at `t_s` with speed `v_mm_s` and has tangential
 /// acceleration `a_mm_s2`.
 #[derive(Clone, Copy)]
@@ -230,7 +234,7 @@ fn sample_span(
             (mv.path.start(), Vec3::zeros(), Vec3::zeros())
         };
         let kick = impulse(t);
-        let phase = if kick == Vec3::zeros() {
+        let phase = if kick.norm() <= CORNER_MIN_MM_S2 {
             law.phase
         } else {
             Phase::Corner
@@ -586,6 +590,36 @@ mod tests {
                 assert_eq!(collect(Some(&before), &mv, Some(&after)), s);
             }
         }
+    }
+
+    #[test]
+    fn collinear_junction_is_not_a_corner_but_a_bend_is() {
+        let (v, t0) = (60.0, 0.100_4);
+        let dir = Vec3::new(1.0, 2.0, 0.5);
+        let p0 = Vec3::new(0.1, 0.2, 0.3);
+        let p1 = p0 + dir * 3.7;
+        let p2 = p1 + dir * 0.7;
+        let a = planned(Path::line(p0, p1), t0, v, v, v, 1000.0);
+        let b = planned(Path::line(p1, p2), t0 + a.duration_s(), v, v, v, 1000.0);
+        let s = collect(None, &b, None);
+        let straight = collect(Some(&a), &b, None);
+        // The tangents differ by rounding only.
+        let dv = (a.path.end_dir() - b.path.start_dir()).norm();
+        assert!(dv > 0.0 && dv < 1e-15);
+        assert!(straight.iter().take(3).all(|x| x.phase == Phase::Cruise));
+        // A bend: (1, 2, 0.5) then (2, −1, 0), at right angles: |Δv| = v·√2 at the junction.
+        let c = planned(
+            Path::line(p1, p1 + Vec3::new(2.0, -1.0, 0.0)),
+            b.t0_s,
+            v,
+            v,
+            v,
+            1000.0,
+        );
+        let bent = collect(Some(&a), &c, None);
+        assert_eq!(bent[0].phase, Phase::Corner);
+        assert!((bent[0].acc_mm_s2.norm() - v * 2f64.sqrt() / TS).abs() < 1e-6);
+        assert_eq!(s.len(), straight.len());
     }
 
     #[test]
