@@ -1,7 +1,14 @@
 //! The resampler: planned moves → samples on the global grid t = k·Ts (plus phase
 //! boundaries and junctions), position stepped with the paper's Taylor step (eq. 19).
+//! See `docs/resampler.md`.
 
 use crate::path::Vec3;
+
+pub mod curve;
+mod sampler;
+
+pub use curve::{Curve, Lissajous, motion_on, taylor_step, walk_constant_speed};
+pub use sampler::{sample_move, sample_move_in};
 
 /// Where in its move a sample lies.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
