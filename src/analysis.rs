@@ -66,7 +66,10 @@ pub fn run<R: Read>(
     )?;
     planner.finish(&mut stage.pending);
     stage.process(true, &mut on_move);
-    Ok(RunTotals { read, print_time_s: planner.print_time_s() })
+    Ok(RunTotals {
+        read,
+        print_time_s: planner.print_time_s(),
+    })
 }
 
 /// The parallel stage: planned moves waiting for their model run.
@@ -84,13 +87,24 @@ impl<'m> ModelStage<'m> {
     fn new(machine: &'m Machine, trace: bool) -> Self {
         let model = DeltaModel::new(machine);
         let home_q_mm = model.home_carriages_mm();
-        ModelStage { machine, model, home_q_mm, trace, pending: Vec::new(), prev: None }
+        ModelStage {
+            machine,
+            model,
+            home_q_mm,
+            trace,
+            pending: Vec::new(),
+            prev: None,
+        }
     }
 
     /// Runs the model over the pending moves. All but the last are run unless `last`: the
     /// last one's junction with the move after it is not known yet.
     fn process(&mut self, last: bool, on_move: &mut impl FnMut(MoveResult)) {
-        let n = if last { self.pending.len() } else { self.pending.len().saturating_sub(1) };
+        let n = if last {
+            self.pending.len()
+        } else {
+            self.pending.len().saturating_sub(1)
+        };
         if n == 0 {
             return;
         }
@@ -99,7 +113,11 @@ impl<'m> ModelStage<'m> {
         let results: Vec<MoveResult> = (0..n)
             .into_par_iter()
             .map(|i| {
-                let before = if i == 0 { prev.as_ref() } else { pending.get(i - 1) };
+                let before = if i == 0 {
+                    prev.as_ref()
+                } else {
+                    pending.get(i - 1)
+                };
                 self.evaluate(before, &pending[i], pending.get(i + 1))
             })
             .collect();
@@ -120,12 +138,20 @@ impl<'m> ModelStage<'m> {
         let limit_mm = self.machine.geometry.print_radius_mm;
         let radius_mm = mv.path.max_xy2_mm2().sqrt();
         if radius_mm > limit_mm + GEOMETRY_TOLERANCE_MM {
-            stats.flag(Problem::OutsideRadius { radius_mm, limit_mm });
+            stats.flag(Problem::OutsideRadius {
+                radius_mm,
+                limit_mm,
+            });
         }
         sample_move(prev, mv, next, self.machine.sampling.period_s, &mut |s| {
             match self.model.evaluate(s.pos_mm, s.vel_mm_s, s.acc_mm_s2) {
                 Ok(st) => {
-                    stats.add(s.t_s, s.phase, st.force_n, (st.energy_rate_w - st.power_w).abs());
+                    stats.add(
+                        s.t_s,
+                        s.phase,
+                        st.force_n,
+                        (st.energy_rate_w - st.power_w).abs(),
+                    );
                     for tower in 0..3 {
                         if st.q_mm[tower] > self.home_q_mm[tower] + GEOMETRY_TOLERANCE_MM {
                             stats.flag(Problem::AboveHome {
@@ -145,9 +171,31 @@ impl<'m> ModelStage<'m> {
                         let _ = writeln!(
                             trace,
                             "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-                            s.t_s, s.line, p.x, p.y, p.z, v.x, v.y, v.z, a.x, a.y, a.z,
-                            q[0], q[1], q[2], dq[0], dq[1], dq[2], ddq[0], ddq[1], ddq[2],
-                            f[0], f[1], f[2], st.power_w, st.energy_rate_w
+                            s.t_s,
+                            s.line,
+                            p.x,
+                            p.y,
+                            p.z,
+                            v.x,
+                            v.y,
+                            v.z,
+                            a.x,
+                            a.y,
+                            a.z,
+                            q[0],
+                            q[1],
+                            q[2],
+                            dq[0],
+                            dq[1],
+                            dq[2],
+                            ddq[0],
+                            ddq[1],
+                            ddq[2],
+                            f[0],
+                            f[1],
+                            f[2],
+                            st.power_w,
+                            st.energy_rate_w
                         );
                     }
                 }
@@ -173,10 +221,12 @@ pub fn check_file(
 ) -> anyhow::Result<Report> {
     let file = File::open(path).with_context(|| format!("cannot open {}", path.display()))?;
     let name = path.display().to_string();
-    let mut report =
-        Report::new(&name, &machine.name, machine.motors.max_force_n, all_moves);
+    let mut report = Report::new(&name, &machine.name, machine.motors.max_force_n, all_moves);
     let mut diags = Vec::new();
-    let input = ProgressReader { inner: file, bar: progress };
+    let input = ProgressReader {
+        inner: file,
+        bar: progress,
+    };
     let totals = run(
         BufReader::with_capacity(1 << 16, input),
         machine,
@@ -192,8 +242,8 @@ pub fn check_file(
     report.summary.print_time_s = totals.print_time_s;
     let lines = report.violation_lines();
     if !lines.is_empty() {
-        let texts = line_texts(path, &lines)
-            .with_context(|| format!("cannot read {name} again"))?;
+        let texts =
+            line_texts(path, &lines).with_context(|| format!("cannot read {name} again"))?;
         report.set_commands(|line| texts.get(&line).cloned());
     }
     Ok(report)
@@ -203,7 +253,9 @@ pub fn check_file(
 fn line_texts(path: &Path, lines: &[u64]) -> io::Result<HashMap<u64, String>> {
     const SHOWN: usize = 72;
     let wanted: BTreeSet<u64> = lines.iter().copied().collect();
-    let Some(&last) = wanted.last() else { return Ok(HashMap::new()) };
+    let Some(&last) = wanted.last() else {
+        return Ok(HashMap::new());
+    };
     let mut reader = BufReader::new(File::open(path)?);
     let mut buf = Vec::new();
     let mut texts = HashMap::new();
@@ -218,7 +270,14 @@ fn line_texts(path: &Path, lines: &[u64]) -> io::Result<HashMap<u64, String>> {
             let text = String::from_utf8_lossy(&buf);
             let text = text.trim_end();
             let short: String = text.chars().take(SHOWN).collect();
-            texts.insert(n, if short.len() < text.len() { short + "…" } else { short });
+            texts.insert(
+                n,
+                if short.len() < text.len() {
+                    short + "…"
+                } else {
+                    short
+                },
+            );
         }
     }
     Ok(texts)

@@ -14,17 +14,37 @@ fn path(p: &str) -> String {
 
 #[test]
 fn exit_codes_mean_something() {
-    let ok = run(&["check", &path("samples/calib-cube_cura413_kossel-mini.gcode"), "-m", &path(KOSSEL)]);
+    let ok = run(&[
+        "check",
+        &path("samples/calib-cube_cura413_kossel-mini.gcode"),
+        "-m",
+        &path(KOSSEL),
+    ]);
     assert_eq!(ok.status.code(), Some(0), "{}{}", stdout(&ok), stderr(&ok));
     assert!(stdout(&ok).contains(": OK"), "{}", stdout(&ok));
 
-    let over = run(&["check", &path("samples/over-limit.gcode"), "-m", &path(KOSSEL)]);
-    assert_eq!(over.status.code(), Some(1), "{}{}", stdout(&over), stderr(&over));
+    let over = run(&[
+        "check",
+        &path("samples/over-limit.gcode"),
+        "-m",
+        &path(KOSSEL),
+    ]);
+    assert_eq!(
+        over.status.code(),
+        Some(1),
+        "{}{}",
+        stdout(&over),
+        stderr(&over)
+    );
     assert!(stdout(&over).contains("FAIL"), "{}", stdout(&over));
 
     let missing = run(&["check", "no-such-file.gcode", "-m", &path(KOSSEL)]);
     assert_eq!(missing.status.code(), Some(2));
-    assert!(stderr(&missing).contains("no-such-file.gcode"), "{}", stderr(&missing));
+    assert!(
+        stderr(&missing).contains("no-such-file.gcode"),
+        "{}",
+        stderr(&missing)
+    );
 
     let usage = run(&["check", "--frobnicate"]);
     assert_eq!(usage.status.code(), Some(2));
@@ -57,10 +77,14 @@ fn json_report_follows_the_design_schema() {
     assert!(!viol.is_empty());
     for x in viol {
         assert_eq!(x["kind"], "force");
-        assert!(["accel", "cruise", "decel", "corner"].contains(&x["phase"].as_str().unwrap_or("")));
+        assert!(
+            ["accel", "cruise", "decel", "corner"].contains(&x["phase"].as_str().unwrap_or(""))
+        );
         let tower = x["tower"].as_u64().expect("tower");
         assert!((1..=3).contains(&tower));
-        let f = x["peak_force_n"][(tower - 1) as usize].as_f64().expect("force");
+        let f = x["peak_force_n"][(tower - 1) as usize]
+            .as_f64()
+            .expect("force");
         assert!(f > v["limit_force_n"].as_f64().unwrap_or(f64::INFINITY));
     }
     let moves = v["moves"].as_array().expect("--all-moves lists moves");
@@ -77,16 +101,35 @@ fn json_report_follows_the_design_schema() {
         "json",
     ]);
     let arr: serde_json::Value = serde_json::from_slice(&two.stdout).expect("JSON");
-    let files: Vec<&str> = arr.as_array().expect("array").iter().filter_map(|r| r["file"].as_str()).collect();
-    assert!(files[0].ends_with("over-limit.gcode") && files[1].ends_with("kossel-mini.gcode"), "{files:?}");
+    let files: Vec<&str> = arr
+        .as_array()
+        .expect("array")
+        .iter()
+        .filter_map(|r| r["file"].as_str())
+        .collect();
+    assert!(
+        files[0].ends_with("over-limit.gcode") && files[1].ends_with("kossel-mini.gcode"),
+        "{files:?}"
+    );
 }
 
 #[test]
 fn github_format_annotates_lines() {
-    let o = run(&["check", &path("samples/over-limit.gcode"), "-m", &path(KOSSEL), "--format", "github"]);
+    let o = run(&[
+        "check",
+        &path("samples/over-limit.gcode"),
+        "-m",
+        &path(KOSSEL),
+        "--format",
+        "github",
+    ]);
     assert_eq!(o.status.code(), Some(1));
     let out = stdout(&o);
-    assert!(out.lines().any(|l| l.starts_with("::error file=") && l.contains(",line=")), "{out}");
+    assert!(
+        out.lines()
+            .any(|l| l.starts_with("::error file=") && l.contains(",line=")),
+        "{out}"
+    );
 }
 
 #[test]
@@ -95,7 +138,14 @@ fn annotate_keeps_every_input_byte_and_is_idempotent() {
     let input = repo("samples/over-limit.gcode");
     let once = dir.path().join("once.gcode");
     let twice = dir.path().join("twice.gcode");
-    let o = run(&["annotate", &input.display().to_string(), "-m", &path(KOSSEL), "-o", &once.display().to_string()]);
+    let o = run(&[
+        "annotate",
+        &input.display().to_string(),
+        "-m",
+        &path(KOSSEL),
+        "-o",
+        &once.display().to_string(),
+    ]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     assert!(stdout(&o).contains("WARNING"), "{}", stdout(&o));
     let annotated = fs::read(&once).unwrap();
@@ -103,12 +153,27 @@ fn annotate_keeps_every_input_byte_and_is_idempotent() {
     assert_ne!(annotated, original);
     assert!(String::from_utf8_lossy(&annotated).contains("; delta-gcode: OVER force"));
     assert_eq!(strip_ours(&annotated), original);
-    let o = run(&["annotate", &once.display().to_string(), "-m", &path(KOSSEL), "-o", &twice.display().to_string()]);
+    let o = run(&[
+        "annotate",
+        &once.display().to_string(),
+        "-m",
+        &path(KOSSEL),
+        "-o",
+        &twice.display().to_string(),
+    ]);
     assert_eq!(o.status.code(), Some(0));
     assert_eq!(fs::read(&twice).unwrap(), annotated);
 
     // --strict turns the warning into exit 1.
-    let o = run(&["annotate", &input.display().to_string(), "-m", &path(KOSSEL), "-o", &twice.display().to_string(), "--strict"]);
+    let o = run(&[
+        "annotate",
+        &input.display().to_string(),
+        "-m",
+        &path(KOSSEL),
+        "-o",
+        &twice.display().to_string(),
+        "--strict",
+    ]);
     assert_eq!(o.status.code(), Some(1));
 }
 
@@ -150,11 +215,19 @@ fn failed_in_place_write_leaves_the_input_untouched() {
         path(KOSSEL),
         file.display()
     );
-    let o = std::process::Command::new("sh").arg("-c").arg(&script).output().unwrap();
+    let o = std::process::Command::new("sh")
+        .arg("-c")
+        .arg(&script)
+        .output()
+        .unwrap();
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("cube.gcode"), "{}", stderr(&o));
     assert_eq!(fs::read(&file).unwrap(), original);
-    assert_eq!(fs::read_dir(dir.path()).unwrap().count(), 1, "no temporary file left");
+    assert_eq!(
+        fs::read_dir(dir.path()).unwrap().count(),
+        1,
+        "no temporary file left"
+    );
 }
 
 #[test]
@@ -175,7 +248,12 @@ fn slicer_hook_as_prusaslicer_runs_it() {
         .env("SLIC3R_PP_OUTPUT_NAME", dir.path().join("part.gcode"))
         .output()
         .unwrap();
-    assert_eq!(o.status.code(), Some(0), "a non-zero exit aborts the export: {}", stderr(&o));
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "a non-zero exit aborts the export: {}",
+        stderr(&o)
+    );
     assert!(stdout(&o).contains("WARNING"));
     let annotated = fs::read(&file).unwrap();
     assert_eq!(strip_ours(&annotated), original);
@@ -188,7 +266,14 @@ fn lissajous_at_low_speed_sums_to_the_suspended_weight() {
     // (6·0.02 + 0.5 + 3·0.25) kg · 9.81 m/s² = 13.44 N (eq. 17).
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("t.csv");
-    let o = run(&["trace", &path("samples/lissajous_10.gcode"), "-m", &path(PAPER), "-o", &csv.display().to_string()]);
+    let o = run(&[
+        "trace",
+        &path("samples/lissajous_10.gcode"),
+        "-m",
+        &path(PAPER),
+        "-o",
+        &csv.display().to_string(),
+    ]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let (header, rows) = read_trace(&fs::read_to_string(&csv).unwrap());
     let col = |name: &str| header.iter().position(|h| h == name).expect(name);
@@ -201,7 +286,11 @@ fn lissajous_at_low_speed_sums_to_the_suspended_weight() {
         }
         on_path += 1;
         let sum = r[f1] + r[f2] + r[f3];
-        assert!((sum - weight).abs() < 0.005 * weight, "t={} sum={sum}", r[0]);
+        assert!(
+            (sum - weight).abs() < 0.005 * weight,
+            "t={} sum={sum}",
+            r[0]
+        );
     }
     assert!(on_path > 10_000, "{on_path} samples on the path");
 }
@@ -213,16 +302,32 @@ fn trace_power_equals_the_energy_rate() {
     // U = g (m_c Σ q + m_p z_P), with the paper's masses (paper.yaml).
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("t.csv");
-    let o = run(&["trace", &path("samples/lissajous_200.gcode"), "-m", &path(PAPER), "-o", &csv.display().to_string()]);
+    let o = run(&[
+        "trace",
+        &path("samples/lissajous_200.gcode"),
+        "-m",
+        &path(PAPER),
+        "-o",
+        &csv.display().to_string(),
+    ]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     let (header, rows) = read_trace(&fs::read_to_string(&csv).unwrap());
     let col = |name: &str| header.iter().position(|h| h == name).expect(name);
     let (m_c, m_p, g) = (0.25 + 0.02, 0.5 + 3.0 * 0.02, 9.81);
     let energy = |r: &Vec<f64>| {
         let mm = 1e-3;
-        let dq2: f64 = ["dq1_mm_s", "dq2_mm_s", "dq3_mm_s"].iter().map(|c| (r[col(c)] * mm).powi(2)).sum();
-        let v2: f64 = ["vx_mm_s", "vy_mm_s", "vz_mm_s"].iter().map(|c| (r[col(c)] * mm).powi(2)).sum();
-        let q: f64 = ["q1_mm", "q2_mm", "q3_mm"].iter().map(|c| r[col(c)] * mm).sum();
+        let dq2: f64 = ["dq1_mm_s", "dq2_mm_s", "dq3_mm_s"]
+            .iter()
+            .map(|c| (r[col(c)] * mm).powi(2))
+            .sum();
+        let v2: f64 = ["vx_mm_s", "vy_mm_s", "vz_mm_s"]
+            .iter()
+            .map(|c| (r[col(c)] * mm).powi(2))
+            .sum();
+        let q: f64 = ["q1_mm", "q2_mm", "q3_mm"]
+            .iter()
+            .map(|c| r[col(c)] * mm)
+            .sum();
         0.5 * m_c * dq2 + 0.5 * m_p * v2 + g * (m_c * q + m_p * r[col("z_mm")] * mm)
     };
     let (t, power, rate) = (col("t_s"), col("power_w"), col("energy_rate_w"));
@@ -234,8 +339,11 @@ fn trace_power_equals_the_energy_rate() {
         let (h1, h2) = (b[t] - a[t], c[t] - b[t]);
         // Away from phase boundaries and junction boxes: three samples a full period apart
         // whose accelerations agree.
-        let smooth = (h1 - 1e-3).abs() < 1e-9 && (h2 - 1e-3).abs() < 1e-9
-            && ["ax_mm_s2", "ay_mm_s2"].iter().all(|k| (a[col(k)] - c[col(k)]).abs() < 0.05 * (1.0 + b[col(k)].abs()));
+        let smooth = (h1 - 1e-3).abs() < 1e-9
+            && (h2 - 1e-3).abs() < 1e-9
+            && ["ax_mm_s2", "ay_mm_s2"]
+                .iter()
+                .all(|k| (a[col(k)] - c[col(k)]).abs() < 0.05 * (1.0 + b[col(k)].abs()));
         if !smooth || b[col("z_mm")].abs() > 1e-9 {
             continue;
         }

@@ -51,7 +51,9 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     })
     .with_context(|| format!("annotating {}", args.file.display()))?;
     if let Some(path) = &args.report {
-        let json = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("json"));
+        let json = path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("json"));
         replace_file(path, |w| {
             if json {
                 write_json(w, std::slice::from_ref(&report))

@@ -37,7 +37,9 @@ pub struct Progress {
 impl Progress {
     pub fn new(quiet: bool) -> Self {
         let show = !quiet && std::io::stderr().is_terminal();
-        Progress { multi: show.then(MultiProgress::new) }
+        Progress {
+            multi: show.then(MultiProgress::new),
+        }
     }
 
     /// A bar over the bytes of `path`, if it is large enough to be worth one.
@@ -61,11 +63,18 @@ impl Progress {
 /// Prints a file's diagnostics to stderr as `file:line:column: severity: message`.
 pub fn print_diagnostics(report: &Report) {
     for d in report.diagnostics.iter().take(DIAGNOSTICS_SHOWN) {
-        eprintln!("{}:{}:{}: {}: {}", report.file, d.line, d.column, d.severity, d.message);
+        eprintln!(
+            "{}:{}:{}: {}: {}",
+            report.file, d.line, d.column, d.severity, d.message
+        );
     }
     let total = (report.summary.warnings + report.summary.errors) as usize;
     if total > DIAGNOSTICS_SHOWN {
-        eprintln!("{}: … and {} more diagnostics", report.file, total - DIAGNOSTICS_SHOWN);
+        eprintln!(
+            "{}: … and {} more diagnostics",
+            report.file,
+            total - DIAGNOSTICS_SHOWN
+        );
     }
 }
 

@@ -39,7 +39,13 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
                 }
             },
             |d| {
-                eprintln!("{}:{}:{}: {}", args.file.display(), d.line, d.column, d.message);
+                eprintln!(
+                    "{}:{}:{}: {}",
+                    args.file.display(),
+                    d.line,
+                    d.column,
+                    d.message
+                );
             },
         )?;
         failure

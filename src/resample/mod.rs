@@ -8,7 +8,7 @@ pub mod curve;
 mod sampler;
 
 pub use curve::{Curve, Lissajous, motion_on, taylor_step, walk_constant_speed};
-pub use sampler::{sample_move, sample_move_in};
+pub use sampler::sample_move;
 
 /// Where in its move a sample lies.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]

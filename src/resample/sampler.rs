@@ -23,10 +23,15 @@ use crate::planner::PlannedMove;
 ///
 /// `prev` and `next` are the neighbouring moves (None at the start or end of a run, where
 /// the nozzle is at rest). A sample's acceleration is the planned one (tangential plus
-/// centripetal) plus Δv/Ts for every junction within half a period of it
-/// (|t − t_j| < Ts/2), Δv = v_out − v_in being the velocity jump at the junction. Only the
-/// junctions at the move's two ends are seen: when a neighbour is shorter than Ts/2, use
-/// [`sample_move_in`], which looks further. Pure and allocation-free.
+/// centripetal) plus the junction impulses: the velocity jump Δv = v_out − v_in of a
+/// junction is spread evenly over a box from half a move before it to half a move after it,
+/// each half at most half a period: [t_j − min(Ts, d_in)/2, t_j + min(Ts, d_out)/2]. So a
+/// corner between long moves shows Δv/Ts, and a curve tessellated into moves shorter than
+/// Ts shows exactly Δv/d = v²/r at every sample: the boxes of neighbouring junctions tile
+/// the time line without overlapping, so no sample counts two junctions or none (a fixed
+/// box of width Ts would count ⌊Ts/d⌋ or ⌈Ts/d⌉ of them, up to 40 % off). Because a box
+/// never reaches past the middle of a neighbouring move, `prev` and `next` are all a move
+/// needs. Pure and allocation-free.
 ///
 /// `period_s` must be positive and finite (the machine profile guarantees it); otherwise
 /// nothing is emitted.
@@ -38,76 +43,32 @@ pub fn sample_move(
     out: &mut impl FnMut(Sample),
 ) {
     let t_end = next.map_or(mv.t0_s + mv.duration_s(), |n| n.t0_s);
-    let at_start = (
-        mv.t0_s,
-        start_velocity(mv) - prev.map_or(Vec3::zeros(), end_velocity),
-    );
-    let at_end = (
-        t_end,
-        next.map_or(Vec3::zeros(), start_velocity) - end_velocity(mv),
-    );
+    let half = |d: f64| 0.5 * d.max(0.0).min(period_s);
+    let own = half(t_end - mv.t0_s);
+    // The start junction's box reaches `own` into this move, the end junction's `own` back.
+    let start_dv = start_velocity(mv) - prev.map_or(Vec3::zeros(), end_velocity);
+    let start_kick = impulse_density(start_dv, prev.map_or(0.0, |p| half(p.duration_s())) + own);
+    let end_dv = next.map_or(Vec3::zeros(), start_velocity) - end_velocity(mv);
+    let end_kick = impulse_density(end_dv, own + next.map_or(0.0, |n| half(n.duration_s())));
     let impulse = |t: f64| {
-        let mut a = Vec3::zeros();
-        for (tj, dv) in [at_start, at_end] {
-            if (t - tj).abs() < 0.5 * period_s {
-                a += dv / period_s;
-            }
+        if t < mv.t0_s + own {
+            start_kick
+        } else if t >= t_end - own {
+            end_kick
+        } else {
+            Vec3::zeros()
         }
-        a
     };
     sample_span(mv, t_end, period_s, impulse, out);
 }
 
-/// Samples of `moves[i]`, like [`sample_move`] with `moves[i - 1]` and `moves[i + 1]` as
-/// neighbours, but every junction of the sequence within half a period of a sample adds its
-/// impulse, however short the moves between (a finely tessellated curve). `moves` must be
-/// consecutive in time; `moves[0]` starts and the last move ends at rest. Nothing is
-/// emitted when `i` is out of range.
-pub fn sample_move_in(
-    moves: &[PlannedMove],
-    i: usize,
-    period_s: f64,
-    out: &mut impl FnMut(Sample),
-) {
-    let Some(mv) = moves.get(i) else { return };
-    let half = 0.5 * period_s;
-    let t_end = junction(moves, i + 1).0;
-    let impulse = |t: f64| {
-        let mut a = Vec3::zeros();
-        // Junction j joins moves[j - 1] to moves[j]; junctions i and before are at or
-        // before t, junctions i + 1 and after at or after it.
-        for j in (0..=i).rev() {
-            let (tj, dv) = junction(moves, j);
-            if t - tj >= half {
-                break;
-            }
-            a += dv / period_s;
-        }
-        for j in i + 1..=moves.len() {
-            let (tj, dv) = junction(moves, j);
-            if tj - t >= half {
-                break;
-            }
-            a += dv / period_s;
-        }
-        a
-    };
-    sample_span(mv, t_end, period_s, impulse, out);
-}
-
-/// Time and velocity jump of junction j of a sequence (into `moves[j]`; j = len is the end
-/// of the last move, to rest).
-fn junction(moves: &[PlannedMove], j: usize) -> (f64, Vec3) {
-    let before = j
-        .checked_sub(1)
-        .and_then(|p| moves.get(p))
-        .map_or(Vec3::zeros(), end_velocity);
-    match moves.get(j) {
-        Some(m) => (m.t0_s, start_velocity(m) - before),
-        None => {
-            let t = moves.last().map_or(0.0, |l| l.t0_s + l.duration_s());
-            (t, -before)
-        }
+/// A velocity jump spread evenly over `width_s`: the acceleration it adds (none over a
+/// zero width, where there is no move to spread it over).
+fn impulse_density(dv: Vec3, width_s: f64) -> Vec3 {
+    if width_s > 0.0 {
+        dv / width_s
+    } else {
+        Vec3::zeros()
     }
 }
 
@@ -338,7 +299,8 @@ mod tests {
     fn collect_seq(moves: &[PlannedMove]) -> Vec<Sample> {
         let mut v = Vec::new();
         for i in 0..moves.len() {
-            sample_move_in(moves, i, TS, &mut |s| v.push(s));
+            let prev = i.checked_sub(1).map(|p| &moves[p]);
+            sample_move(prev, &moves[i], moves.get(i + 1), TS, &mut |s| v.push(s));
         }
         v
     }
@@ -696,75 +658,54 @@ mod tests {
     }
 
     #[test]
-    fn tessellated_circle_shows_v2_over_r() {
+    fn tessellated_circle_shows_v2_over_r_at_every_sample() {
         let v = 100.0;
-        // Chords of exactly v·Ts, junctions off the grid: one junction per window.
-        let (moves, r) = tessellated_circle(600, v, TS, 0.000_37);
-        let mut worst = 0.0_f64;
-        for i in 10..590 {
-            sample_move(
-                Some(&moves[i - 1]),
-                &moves[i],
-                Some(&moves[i + 1]),
-                TS,
-                &mut |s| {
-                    let (e, cos) = centripetal_error(&s, v, r);
-                    assert!(cos > 0.999);
-                    worst = worst.max(e);
-                },
+        // Chords lasting Ts, Ts/3 and 0.7·Ts, junctions off the grid: every sample, on or
+        // off the grid, shows the centripetal acceleration of the circle through the
+        // vertices (the chord polygon's own v²/r: Δv/d = 2v·sin(π/n)/d = v²/r).
+        for (n, tau) in [(600, TS), (1800, TS / 3.0), (1000, 0.7 * TS)] {
+            let (moves, r) = tessellated_circle(n, v, tau, 0.000_37);
+            let all = collect_seq(&moves);
+            let mut worst = 0.0_f64;
+            for s in &all[all.len() / 10..all.len() * 9 / 10] {
+                let (e, cos) = centripetal_error(s, v, r);
+                assert!(cos > 0.999, "n={n}: direction {cos}");
+                worst = worst.max(e);
+            }
+            assert!(worst < 0.02, "n={n}: worst {worst}");
+        }
+    }
+
+    #[test]
+    fn short_moves_spread_each_impulse_over_their_own_halves() {
+        // Three moves of 0.2·Ts each around a single bend: the bend's Δv is spread over
+        // half of each of its two moves, 0.2·Ts in all, and the other samples have none.
+        let v = 50.0;
+        let d = 0.2 * TS;
+        let p0 = Vec3::zeros();
+        let p1 = p0 + Vec3::new(v * d, 0.0, 0.0);
+        let p2 = p1 + Vec3::new(0.0, v * d, 0.0);
+        let p3 = p2 + Vec3::new(0.0, v * d, 0.0);
+        let t0 = 0.010_05;
+        let a = planned(Path::line(p0, p1), t0, v, v, v, 1000.0);
+        let b = planned(Path::line(p1, p2), t0 + d, v, v, v, 1000.0);
+        let c = planned(Path::line(p2, p3), t0 + 2.0 * d, v, v, v, 1000.0);
+        let dv = (Vec3::new(0.0, v, 0.0) - Vec3::new(v, 0.0, 0.0)) / d;
+        let in_b = collect(Some(&a), &b, Some(&c));
+        for s in &in_b {
+            let expect = if s.t_s < b.t0_s + 0.5 * d {
+                dv
+            } else {
+                Vec3::zeros()
+            };
+            assert!(
+                (s.acc_mm_s2 - expect).norm() < 1e-6 * dv.norm(),
+                "t={}",
+                s.t_s
             );
         }
-        assert!(worst < 0.02, "worst {worst}");
-        // Chords of v·Ts/3 need the whole sequence: three junctions per window.
-        let (moves, r) = tessellated_circle(1800, v, TS / 3.0, 0.000_37);
-        let all = collect_seq(&moves);
-        let mut worst = 0.0_f64;
-        for s in &all[all.len() / 10..all.len() * 9 / 10] {
-            let (e, cos) = centripetal_error(s, v, r);
-            assert!(cos > 0.999);
-            worst = worst.max(e);
-        }
-        assert!(worst < 0.02, "worst {worst}");
-        // With its two neighbours only, sample_move sees two of the three.
-        let mut short = Vec::new();
-        sample_move(
-            Some(&moves[899]),
-            &moves[900],
-            Some(&moves[901]),
-            TS,
-            &mut |s| short.push(s),
-        );
-        assert!(short.iter().all(|s| centripetal_error(s, v, r).0 > 0.3));
-    }
-
-    #[test]
-    fn incommensurate_tessellation_shows_v2_over_r_on_average() {
-        let v = 100.0;
-        let (moves, r) = tessellated_circle(1000, v, 0.7 * TS, 0.000_37);
-        let all = collect_seq(&moves);
-        let grid: Vec<&Sample> = all[all.len() / 10..all.len() * 9 / 10]
-            .iter()
-            .filter(|s| is_grid(s.t_s))
-            .collect();
-        let mean = grid.iter().map(|s| s.acc_mm_s2.norm()).sum::<f64>() / grid.len() as f64;
-        assert!(
-            (mean / (v * v / r) - 1.0).abs() < 0.02,
-            "mean {mean} vs {}",
-            v * v / r
-        );
-    }
-
-    #[test]
-    fn sequence_and_neighbour_forms_agree_for_long_moves() {
-        let (moves, _) = tessellated_circle(60, 100.0, 3.3 * TS, 0.000_37);
-        let all = collect_seq(&moves);
-        let mut pairwise = Vec::new();
-        for i in 0..moves.len() {
-            let prev = i.checked_sub(1).map(|p| &moves[p]);
-            sample_move(prev, &moves[i], moves.get(i + 1), TS, &mut |s| {
-                pairwise.push(s)
-            });
-        }
-        assert_eq!(all, pairwise);
+        let in_a = collect(None, &a, Some(&b));
+        let last = in_a.last().map(|s| s.acc_mm_s2).unwrap_or_default();
+        assert!((last - dv).norm() < 1e-6 * dv.norm());
     }
 }

@@ -39,9 +39,18 @@ pub fn strip_ours(bytes: &[u8]) -> Vec<u8> {
 /// Parses a trace CSV into its header and rows of numbers.
 pub fn read_trace(text: &str) -> (Vec<String>, Vec<Vec<f64>>) {
     let mut lines = text.lines();
-    let header = lines.next().unwrap_or_default().split(',').map(str::to_string).collect();
+    let header = lines
+        .next()
+        .unwrap_or_default()
+        .split(',')
+        .map(str::to_string)
+        .collect();
     let rows = lines
-        .map(|l| l.split(',').map(|v| v.parse::<f64>().expect("a number")).collect())
+        .map(|l| {
+            l.split(',')
+                .map(|v| v.parse::<f64>().expect("a number"))
+                .collect()
+        })
         .collect();
     (header, rows)
 }
