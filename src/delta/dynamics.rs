@@ -177,7 +177,9 @@ mod tests {
                 let dq = (qp[i] - qm[i]) / (2.0 * h);
                 let ddq = (qp[i] - 2.0 * q0[i] + qm[i]) / (h * h);
                 assert!((dq - s.dq_mm_s[i]).abs() < 1e-4 * (1.0 + dq.abs()), "dq {dq} vs {}", s.dq_mm_s[i]);
-                assert!((ddq - s.ddq_mm_s2[i]).abs() < 1e-3 * (1.0 + ddq.abs()), "ddq {ddq} vs {}", s.ddq_mm_s2[i]);
+                // Truncation h²/12·q'''' grows with the acceleration scale.
+                let tol = 1e-4 * ddq.abs() + 1e-6 * (a.norm() + v.norm_squared());
+                assert!((ddq - s.ddq_mm_s2[i]).abs() < tol, "ddq {ddq} vs {}", s.ddq_mm_s2[i]);
                 // eq. 3: Jx ṗ = Jq q̇ with the differenced q̇.
                 let rows = m.jx_rows(m.platform_mm(p), s.q_mm);
                 let lhs = dot(rows[i], [v.x, v.y, v.z]);
