@@ -67,3 +67,83 @@ impl DeltaModel {
         radius.max(0.0)
     }
 }
+
+impl DeltaModel {
+    /// The highest nozzle z at which the whole disc of `radius_mm` is reachable (the
+    /// inverse of [`DeltaModel::reachable_radius_mm`] on the carriage-top constraint):
+    /// min_i [home_z + √(l_i² − R²) − √(l_i² − (R − r)²)], mm.
+    pub fn full_disc_top_mm(&self, radius_mm: f64) -> f64 {
+        let d = self.delta_radius_mm - radius_mm;
+        (0..3)
+            .map(|i| {
+                let l2 = self.arm2_mm2[i];
+                self.top_mm[i] - self.nozzle_offset_mm - (l2 - d * d).max(0.0).sqrt()
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::test_support::{kossel, kossel_machine};
+    use super::*;
+
+    /// Whether every point of the circle of `r` at height `z` is reachable (brute force).
+    fn circle_reachable(m: &DeltaModel, r: f64, z: f64) -> bool {
+        (0..720).all(|k| {
+            let th = (k as f64 * 0.5).to_radians();
+            m.inverse(Vec3::new(r * th.cos(), r * th.sin(), z)).is_ok()
+        })
+    }
+
+    #[test]
+    fn reachable_radius_agrees_with_the_inverse_kinematics() {
+        let m = kossel();
+        for z in [0.0, 50.0, 150.0, 250.0, 285.0] {
+            let r = m.reachable_radius_mm(z);
+            assert!(r > 0.0, "z {z}");
+            assert!(circle_reachable(&m, r * 0.999, z), "z {z} r {r}");
+            assert!(!circle_reachable(&m, r * 1.001 + 1e-3, z), "z {z} r {r}");
+        }
+        // At the homed height only the centre is left, and nothing above it.
+        assert!(m.reachable_radius_mm(290.0) < 1e-6);
+        assert_eq!(m.reachable_radius_mm(300.0), 0.0);
+    }
+
+    #[test]
+    fn full_disc_top_inverts_reachable_radius() {
+        let m = kossel();
+        for r in [10.0, 50.0, 85.0] {
+            let z = m.full_disc_top_mm(r);
+            assert!(z > 0.0 && z < 290.0);
+            assert!((m.reachable_radius_mm(z) - r).abs() < 1e-6, "r {r} z {z}");
+        }
+    }
+
+    #[test]
+    fn slow_radius_is_where_a_carriage_moves_ratio_times_faster() {
+        // Nozzle on the far side of tower C (−y), moving away from it: the fastest
+        // carriage-to-nozzle speed ratio at that radius.
+        let machine = kossel_machine();
+        let m = DeltaModel::new(&machine);
+        for ratio in [3.0, 6.0] {
+            let r = machine.slow_radius_mm(ratio);
+            // Shortest arm (214.5 mm) is tower C's in the fixture.
+            let s = m
+                .evaluate(Vec3::new(0.0, -r, 0.0), Vec3::new(0.0, -1.0, 0.0), Vec3::zeros())
+                .unwrap();
+            assert!((s.dq_mm_s[2].abs() - ratio).abs() < 1e-9, "{ratio}: {:?}", s.dq_mm_s);
+        }
+        // Hand-computed: 3·√(214.5²/10) − 105.
+        assert!((machine.slow_radius_mm(3.0) - 98.492_567).abs() < 1e-5);
+    }
+
+    #[test]
+    fn max_static_force_is_off_centre_and_above_the_centre_value() {
+        let m = kossel();
+        let (f, at, _) = m.max_static_force_n(85.0).unwrap();
+        let centre = m.static_forces_n(Vec3::zeros()).unwrap();
+        assert!(f > centre.iter().fold(0.0, |a: f64, b| a.max(*b)));
+        assert!(at.norm() > 80.0);
+    }
+}
