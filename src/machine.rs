@@ -87,12 +87,8 @@ pub struct Machine {
 /// (when the YAML gives one), the key and what was expected.
 #[derive(Debug, thiserror::Error)]
 pub enum ProfileError {
-    #[error("{origin}: cannot read the machine profile: {source}")]
-    Io {
-        origin: String,
-        #[source]
-        source: std::io::Error,
-    },
+    #[error("{origin}: cannot read the machine profile: {error}")]
+    Io { origin: String, error: std::io::Error },
     /// The YAML does not match the schema (syntax, unknown key, wrong type, missing key).
     #[error("{origin}{}: {message}", fmt_location(*.location))]
     Schema {
@@ -120,9 +116,9 @@ impl Machine {
     /// Reads and resolves a profile file.
     pub fn load(path: &Path) -> Result<Machine, ProfileError> {
         let origin = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| ProfileError::Io {
+        let text = std::fs::read_to_string(path).map_err(|error| ProfileError::Io {
             origin: origin.clone(),
-            source,
+            error,
         })?;
         Machine::from_yaml_str(&text, &origin)
     }
@@ -251,6 +247,7 @@ fn schema_error(e: &serde_yaml::Error, origin: &str) -> ProfileError {
     if let Some(at) = message.rfind(" at line ") {
         message.truncate(at);
     }
+    message = message.replace("expected f64", "expected a number");
     if let Some(hint) = suggest_field(&message) {
         message.push_str(&format!(" (did you mean `{hint}`?)"));
     }
@@ -557,5 +554,117 @@ impl RawMachine {
             },
             gravity_m_s2: self.gravity_m_s2,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const KOSSEL: &str = include_str!("../machines/kossel.yaml");
+
+    fn error_of(text: &str) -> String {
+        Machine::from_yaml_str(text, "m.yaml").unwrap_err().to_string()
+    }
+
+    #[test]
+    fn the_shipped_profiles_load_with_klipper_defaults() {
+        let m = Machine::from_yaml_str(KOSSEL, "kossel.yaml").unwrap();
+        assert_eq!(m.limits.max_z_velocity_mm_s, 300.0);
+        assert_eq!(m.limits.max_z_accel_mm_s2, 3000.0);
+        // Klipper extruder.py: 300 · 4·0.4² / (π·1.75²/4) = 79.824 mm/s, ×10 for accel.
+        assert!((m.extruder.max_extrude_only_velocity_mm_s - 79.824_324).abs() < 1e-5);
+        assert!((m.extruder.max_extrude_only_accel_mm_s2 - 798.243_24).abs() < 1e-4);
+        assert_eq!(m.geometry.tower_angles_deg, [210.0, 330.0, 90.0]);
+        assert_eq!(m.gravity_m_s2, 9.81);
+        assert_eq!(m.geometry.arm_length_mm, [215.0; 3]);
+        let paper = Machine::from_yaml_str(include_str!("../machines/paper.yaml"), "p").unwrap();
+        assert_eq!(paper.masses.platform_kg, 0.5);
+    }
+
+    #[test]
+    fn minimal_profile_fills_every_default() {
+        let text = "name: x
+geometry: {delta_radius_mm: 100, arm_length_mm: [200, 201, 202], home_z_mm: 250, print_radius_mm: 80}
+masses: {cart_kg: 0.2, link_kg: 0.01, platform_kg: 0.1}
+limits: {max_velocity_mm_s: 200, max_accel_mm_s2: 2000}
+motors: {max_force_n: 20}
+";
+        let m = Machine::from_yaml_str(text, "x").unwrap();
+        assert_eq!(m.geometry.arm_length_mm, [200.0, 201.0, 202.0]);
+        assert_eq!(m.geometry.nozzle_offset_mm, 0.0);
+        assert_eq!(m.limits.square_corner_velocity_mm_s, 5.0);
+        assert_eq!(m.limits.minimum_cruise_ratio, 0.5);
+        assert!(m.limits.edge_slowdown);
+        assert_eq!(m.extruder.nozzle_diameter_mm, 0.4);
+        assert_eq!(m.extruder.filament_diameter_mm, 1.75);
+        assert_eq!(m.extruder.instantaneous_corner_velocity_mm_s, 1.0);
+        assert_eq!(m.sampling.period_s, 0.001);
+    }
+
+    #[test]
+    fn base_and_platform_sides_give_the_delta_radius() {
+        let text = KOSSEL.replace(
+            "delta_radius_mm: 105.0",
+            "base_side_mm: 250.0\n  platform_side_mm: 68.1347",
+        );
+        let m = Machine::from_yaml_str(&text, "k").unwrap();
+        // (250 − 68.1347)/√3
+        assert!((m.geometry.delta_radius_mm - 105.0).abs() < 1e-4);
+        let both = KOSSEL.replace("delta_radius_mm: 105.0", "delta_radius_mm: 105\n  base_side_mm: 250");
+        assert!(error_of(&both).contains("not a mix"));
+        let neither = KOSSEL.replace("delta_radius_mm: 105.0", "");
+        assert!(error_of(&neither).contains("expected `delta_radius_mm`"));
+    }
+
+    #[test]
+    fn unknown_key_names_file_line_and_the_closest_name() {
+        let e = error_of(&KOSSEL.replace("delta_radius_mm:", "delta_radus_mm:"));
+        assert!(e.starts_with("m.yaml:7:"), "{e}");
+        assert!(e.contains("unknown field `delta_radus_mm`"), "{e}");
+        assert!(e.contains("did you mean `delta_radius_mm`?"), "{e}");
+        // Nothing close: no suggestion.
+        let e = error_of(&KOSSEL.replace("  edge_slowdown: true", "  zzz: 1"));
+        assert!(e.contains("unknown field `zzz`") && !e.contains("did you mean"), "{e}");
+    }
+
+    #[test]
+    fn wrong_type_and_missing_key_are_located() {
+        let e = error_of(&KOSSEL.replace("cart_kg: 0.22", "cart_kg: heavy"));
+        assert!(e.contains("masses.cart_kg") && e.contains("expected a number"), "{e}");
+        assert!(e.starts_with("m.yaml:"), "{e}");
+        let e = error_of(&KOSSEL.replace("  home_z_mm: 290.0", ""));
+        assert!(e.contains("missing field `home_z_mm`"), "{e}");
+        let e = error_of(&KOSSEL.replace("arm_length_mm: 215.0", "arm_length_mm: [215, 215]"));
+        assert!(e.contains("list of 3 lengths"), "{e}");
+    }
+
+    #[test]
+    fn impossible_machines_are_rejected_with_the_key() {
+        let cases = [
+            ("arm_length_mm: 215.0", "arm_length_mm: 180", "geometry.arm_length_mm"),
+            ("home_z_mm: 290.0", "home_z_mm: -1", "geometry.home_z_mm"),
+            ("cart_kg: 0.22", "cart_kg: 0", "masses.cart_kg"),
+            ("max_force_n: 25.0", "max_force_n: -5", "motors.max_force_n"),
+            ("period_s: 0.001", "period_s: 0", "sampling.period_s"),
+            ("max_accel_mm_s2: 3000", "max_accel_mm_s2: .nan", "limits.max_accel_mm_s2"),
+            ("minimum_cruise_ratio: 0.5", "minimum_cruise_ratio: 1.5", "limits.minimum_cruise_ratio"),
+        ];
+        for (from, to, key) in cases {
+            let text = KOSSEL.replace(from, to);
+            assert_ne!(text, KOSSEL, "{from}");
+            let e = error_of(&text);
+            assert!(e.contains(key), "{e}");
+            // Located at the key's line.
+            let line = text.lines().position(|l| l.trim_start().starts_with(to)).unwrap() + 1;
+            assert!(e.starts_with(&format!("m.yaml:{line}:")), "{e} (line {line})");
+        }
+    }
+
+    #[test]
+    fn edit_distance_counts_single_edits() {
+        assert_eq!(edit_distance("kitten", "sitting"), 3);
+        assert_eq!(edit_distance("", "abc"), 3);
+        assert_eq!(edit_distance("same", "same"), 0);
     }
 }
