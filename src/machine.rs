@@ -88,7 +88,10 @@ pub struct Machine {
 #[derive(Debug, thiserror::Error)]
 pub enum ProfileError {
     #[error("{origin}: cannot read the machine profile: {error}")]
-    Io { origin: String, error: std::io::Error },
+    Io {
+        origin: String,
+        error: std::io::Error,
+    },
     /// The YAML does not match the schema (syntax, unknown key, wrong type, missing key).
     #[error("{origin}{}: {message}", fmt_location(*.location))]
     Schema {
@@ -141,7 +144,11 @@ impl Machine {
     /// shortest arm. Klipper halves speed beyond ratio 3 and quarters it beyond ratio 6.
     pub fn slow_radius_mm(&self, ratio: f64) -> f64 {
         let g = &self.geometry;
-        let l = g.arm_length_mm.iter().copied().fold(f64::INFINITY, f64::min);
+        let l = g
+            .arm_length_mm
+            .iter()
+            .copied()
+            .fold(f64::INFINITY, f64::min);
         ratio * (l * l / (ratio * ratio + 1.0)).sqrt() - g.delta_radius_mm
     }
 
@@ -157,10 +164,19 @@ impl Machine {
             ("masses.platform_kg", self.masses.platform_kg),
             ("limits.max_velocity_mm_s", self.limits.max_velocity_mm_s),
             ("limits.max_accel_mm_s2", self.limits.max_accel_mm_s2),
-            ("limits.max_z_velocity_mm_s", self.limits.max_z_velocity_mm_s),
+            (
+                "limits.max_z_velocity_mm_s",
+                self.limits.max_z_velocity_mm_s,
+            ),
             ("limits.max_z_accel_mm_s2", self.limits.max_z_accel_mm_s2),
-            ("extruder.nozzle_diameter_mm", self.extruder.nozzle_diameter_mm),
-            ("extruder.filament_diameter_mm", self.extruder.filament_diameter_mm),
+            (
+                "extruder.nozzle_diameter_mm",
+                self.extruder.nozzle_diameter_mm,
+            ),
+            (
+                "extruder.filament_diameter_mm",
+                self.extruder.filament_diameter_mm,
+            ),
             ("motors.max_force_n", self.motors.max_force_n),
             ("sampling.period_s", self.sampling.period_s),
             ("gravity_m_s2", self.gravity_m_s2),
@@ -280,7 +296,9 @@ fn edit_distance(a: &str, b: &str) -> usize {
         let mut diag = row[0];
         row[0] = i + 1;
         for (j, &cb) in b.iter().enumerate() {
-            let next = (diag + usize::from(ca != cb)).min(row[j] + 1).min(row[j + 1] + 1);
+            let next = (diag + usize::from(ca != cb))
+                .min(row[j] + 1)
+                .min(row[j + 1] + 1);
             diag = row[j + 1];
             row[j + 1] = next;
         }
@@ -466,7 +484,10 @@ impl<'de> Deserialize<'de> for ArmLength {
             fn visit_u64<E: serde::de::Error>(self, v: u64) -> Result<ArmLength, E> {
                 self.visit_f64(v as f64)
             }
-            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut s: A) -> Result<ArmLength, A::Error> {
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut s: A,
+            ) -> Result<ArmLength, A::Error> {
                 let mut out = [0.0; 3];
                 for (i, slot) in out.iter_mut().enumerate() {
                     *slot = s
@@ -564,7 +585,9 @@ mod tests {
     const KOSSEL: &str = include_str!("../machines/kossel.yaml");
 
     fn error_of(text: &str) -> String {
-        Machine::from_yaml_str(text, "m.yaml").unwrap_err().to_string()
+        Machine::from_yaml_str(text, "m.yaml")
+            .unwrap_err()
+            .to_string()
     }
 
     #[test]
@@ -611,7 +634,10 @@ motors: {max_force_n: 20}
         let m = Machine::from_yaml_str(&text, "k").unwrap();
         // (250 − 68.1347)/√3
         assert!((m.geometry.delta_radius_mm - 105.0).abs() < 1e-4);
-        let both = KOSSEL.replace("delta_radius_mm: 105.0", "delta_radius_mm: 105\n  base_side_mm: 250");
+        let both = KOSSEL.replace(
+            "delta_radius_mm: 105.0",
+            "delta_radius_mm: 105\n  base_side_mm: 250",
+        );
         assert!(error_of(&both).contains("not a mix"));
         let neither = KOSSEL.replace("delta_radius_mm: 105.0", "");
         assert!(error_of(&neither).contains("expected `delta_radius_mm`"));
@@ -625,13 +651,19 @@ motors: {max_force_n: 20}
         assert!(e.contains("did you mean `delta_radius_mm`?"), "{e}");
         // Nothing close: no suggestion.
         let e = error_of(&KOSSEL.replace("  edge_slowdown: true", "  zzz: 1"));
-        assert!(e.contains("unknown field `zzz`") && !e.contains("did you mean"), "{e}");
+        assert!(
+            e.contains("unknown field `zzz`") && !e.contains("did you mean"),
+            "{e}"
+        );
     }
 
     #[test]
     fn wrong_type_and_missing_key_are_located() {
         let e = error_of(&KOSSEL.replace("cart_kg: 0.22", "cart_kg: heavy"));
-        assert!(e.contains("masses.cart_kg") && e.contains("expected a number"), "{e}");
+        assert!(
+            e.contains("masses.cart_kg") && e.contains("expected a number"),
+            "{e}"
+        );
         assert!(e.starts_with("m.yaml:"), "{e}");
         let e = error_of(&KOSSEL.replace("  home_z_mm: 290.0", ""));
         assert!(e.contains("missing field `home_z_mm`"), "{e}");
@@ -642,13 +674,25 @@ motors: {max_force_n: 20}
     #[test]
     fn impossible_machines_are_rejected_with_the_key() {
         let cases = [
-            ("arm_length_mm: 215.0", "arm_length_mm: 180", "geometry.arm_length_mm"),
+            (
+                "arm_length_mm: 215.0",
+                "arm_length_mm: 180",
+                "geometry.arm_length_mm",
+            ),
             ("home_z_mm: 290.0", "home_z_mm: -1", "geometry.home_z_mm"),
             ("cart_kg: 0.22", "cart_kg: 0", "masses.cart_kg"),
             ("max_force_n: 25.0", "max_force_n: -5", "motors.max_force_n"),
             ("period_s: 0.001", "period_s: 0", "sampling.period_s"),
-            ("max_accel_mm_s2: 3000", "max_accel_mm_s2: .nan", "limits.max_accel_mm_s2"),
-            ("minimum_cruise_ratio: 0.5", "minimum_cruise_ratio: 1.5", "limits.minimum_cruise_ratio"),
+            (
+                "max_accel_mm_s2: 3000",
+                "max_accel_mm_s2: .nan",
+                "limits.max_accel_mm_s2",
+            ),
+            (
+                "minimum_cruise_ratio: 0.5",
+                "minimum_cruise_ratio: 1.5",
+                "limits.minimum_cruise_ratio",
+            ),
         ];
         for (from, to, key) in cases {
             let text = KOSSEL.replace(from, to);
@@ -656,8 +700,15 @@ motors: {max_force_n: 20}
             let e = error_of(&text);
             assert!(e.contains(key), "{e}");
             // Located at the key's line.
-            let line = text.lines().position(|l| l.trim_start().starts_with(to)).unwrap() + 1;
-            assert!(e.starts_with(&format!("m.yaml:{line}:")), "{e} (line {line})");
+            let line = text
+                .lines()
+                .position(|l| l.trim_start().starts_with(to))
+                .unwrap()
+                + 1;
+            assert!(
+                e.starts_with(&format!("m.yaml:{line}:")),
+                "{e} (line {line})"
+            );
         }
     }
 

@@ -29,7 +29,14 @@ fn triple(v: &serde_json::Value, key: &str) -> [f64; 3] {
 #[test]
 fn pose_json_has_the_documented_keys() {
     let v = json_of(&[
-        "pose", "--machine", PAPER, "10", "20", "0.2", "--format", "json",
+        "pose",
+        "--machine",
+        PAPER,
+        "10",
+        "20",
+        "0.2",
+        "--format",
+        "json",
     ]);
     for key in ["q_mm", "dq_mm_s", "ddq_mm_s2", "force_n", "lambda"] {
         triple(&v, key);
@@ -70,7 +77,14 @@ fn negative_numbers_need_no_double_dash() {
 #[test]
 fn carriages_run_the_direct_kinematics_back_to_the_pose() {
     let v = json_of(&[
-        "pose", "--machine", KOSSEL, "-30", "25", "10", "--format", "json",
+        "pose",
+        "--machine",
+        KOSSEL,
+        "-30",
+        "25",
+        "10",
+        "--format",
+        "json",
     ]);
     let q = triple(&v, "q_mm");
     let qs = format!("{},{},{}", q[0], q[1], q[2]);
@@ -97,7 +111,10 @@ fn unreachable_pose_is_an_input_error() {
         .unwrap();
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("unreachable") && err.contains("tower"), "{err}");
+    assert!(
+        err.contains("unreachable") && err.contains("tower"),
+        "{err}"
+    );
     let out = cmd()
         .args(["pose", "--machine", KOSSEL, "--carriages", "0,0,1000"])
         .output()

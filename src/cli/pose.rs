@@ -55,7 +55,9 @@ pub struct Args {
 fn parse_triple(s: &str) -> Result<[f64; 3], String> {
     let parts: Vec<&str> = s.split(',').map(str::trim).collect();
     let [a, b, c] = parts[..] else {
-        return Err(format!("expected three comma-separated numbers, found {s:?}"));
+        return Err(format!(
+            "expected three comma-separated numbers, found {s:?}"
+        ));
     };
     let num = |t: &str| match t.parse::<f64>() {
         Ok(v) if v.is_finite() => Ok(v),
@@ -97,9 +99,14 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         Format::Json => println!("{}", serde_json::to_string(&s)?),
         Format::Text => {
             println!("machine: {}", machine.name);
-            println!("nozzle mm: {x:.4} {y:.4} {z:.4}   mm/s: {:.3} {:.3} {:.3}   mm/s²: {:.1} {:.1} {:.1}",
-                vel.x, vel.y, vel.z, acc.x, acc.y, acc.z);
-            println!("{:<22}{:>14}{:>14}{:>14}", "tower", TOWER_NAMES[0], TOWER_NAMES[1], TOWER_NAMES[2]);
+            println!(
+                "nozzle mm: {x:.4} {y:.4} {z:.4}   mm/s: {:.3} {:.3} {:.3}   mm/s²: {:.1} {:.1} {:.1}",
+                vel.x, vel.y, vel.z, acc.x, acc.y, acc.z
+            );
+            println!(
+                "{:<22}{:>14}{:>14}{:>14}",
+                "tower", TOWER_NAMES[0], TOWER_NAMES[1], TOWER_NAMES[2]
+            );
             let rows: [(&str, [f64; 3]); 5] = [
                 ("carriage q (mm)", s.q_mm),
                 ("velocity dq (mm/s)", s.dq_mm_s),
@@ -110,8 +117,14 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
             for (label, v) in rows {
                 println!("{label:<22}{:>14.4}{:>14.4}{:>14.4}", v[0], v[1], v[2]);
             }
-            println!("power ΣQ·dq: {:.6} W   d(K+U)/dt: {:.6} W", s.power_w, s.energy_rate_w);
-            println!("kinetic: {:.6} J   potential: {:.6} J", s.kinetic_j, s.potential_j);
+            println!(
+                "power ΣQ·dq: {:.6} W   d(K+U)/dt: {:.6} W",
+                s.power_w, s.energy_rate_w
+            );
+            println!(
+                "kinetic: {:.6} J   potential: {:.6} J",
+                s.kinetic_j, s.potential_j
+            );
             println!("Jx condition (Frobenius): {:.3}", s.jx_condition);
             let limit = machine.motors.max_force_n;
             if s.force_n.iter().any(|f| f.abs() > limit) {

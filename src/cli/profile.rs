@@ -67,7 +67,11 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
             println!("{}: profile OK ({})", machine.name, args.profile.display());
             println!(
                 "geometry: delta radius {:.3} mm, arms {:.3}/{:.3}/{:.3} mm, nozzle offset {:.3} mm",
-                g.delta_radius_mm, g.arm_length_mm[0], g.arm_length_mm[1], g.arm_length_mm[2], g.nozzle_offset_mm
+                g.delta_radius_mm,
+                g.arm_length_mm[0],
+                g.arm_length_mm[1],
+                g.arm_length_mm[2],
+                g.nozzle_offset_mm
             );
             println!(
                 "reachable radius: {reach_bed:.2} mm at the bed, {reach_home:.2} mm at home z = {:.2} mm; \
@@ -93,16 +97,24 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
             );
             println!(
                 "limits: {} mm/s, {} mm/s², z {} mm/s, {} mm/s², square corner {} mm/s, min cruise ratio {}",
-                l.max_velocity_mm_s, l.max_accel_mm_s2, l.max_z_velocity_mm_s, l.max_z_accel_mm_s2,
-                l.square_corner_velocity_mm_s, l.minimum_cruise_ratio
+                l.max_velocity_mm_s,
+                l.max_accel_mm_s2,
+                l.max_z_velocity_mm_s,
+                l.max_z_accel_mm_s2,
+                l.square_corner_velocity_mm_s,
+                l.minimum_cruise_ratio
             );
             println!(
                 "extruder: extrude-only {:.2} mm/s, {:.1} mm/s², corner {} mm/s",
-                e.max_extrude_only_velocity_mm_s, e.max_extrude_only_accel_mm_s2, e.instantaneous_corner_velocity_mm_s
+                e.max_extrude_only_velocity_mm_s,
+                e.max_extrude_only_accel_mm_s2,
+                e.instantaneous_corner_velocity_mm_s
             );
             println!(
                 "motor limit: {limit} N per carriage ({:.0} % used by the worst static pose); sampling {} s; g = {} m/s²",
-                100.0 * max_static / limit, machine.sampling.period_s, machine.gravity_m_s2
+                100.0 * max_static / limit,
+                machine.sampling.period_s,
+                machine.gravity_m_s2
             );
         }
     }

@@ -80,8 +80,7 @@ impl DeltaModel {
         }
         let (mc, mp) = (self.carriage_kg, self.platform_kg);
         let sum = |f: &dyn Fn(usize) -> f64| f(0) + f(1) + f(2);
-        let kinetic_j =
-            0.5 * (mc * sum(&|i| dq[i] * dq[i]) + mp * dot(v, v)) * MM * MM;
+        let kinetic_j = 0.5 * (mc * sum(&|i| dq[i] * dq[i]) + mp * dot(v, v)) * MM * MM;
         let potential_j = g * (mc * sum(&|i| q[i]) + mp * p[2]) * MM;
         let power_w = sum(&|i| force[i] * dq[i]) * MM;
         let energy_rate_w = (mc * sum(&|i| dq[i] * ddq[i]) + mp * dot(v, a)) * MM * MM
@@ -129,13 +128,15 @@ mod tests {
         workspace_points(&m)
             .take(n)
             .map(|p| {
-                let mut r3 = |s: f64| Vec3::new(rng.range(-s, s), rng.range(-s, s), rng.range(-s, s));
+                let mut r3 =
+                    |s: f64| Vec3::new(rng.range(-s, s), rng.range(-s, s), rng.range(-s, s));
                 (p, r3(300.0), r3(20000.0))
             })
             .collect()
     }
 
     #[test]
+    #[allow(clippy::needless_range_loop)] // i, k index Γ, the rows and the coordinates
     fn jacobians_are_half_the_gradients_of_the_closure_equations() {
         // Γ_i = l_i² − |P − A_i|² differentiated by central differences.
         let m = kossel();
@@ -154,13 +155,20 @@ mod tests {
                     pp[k] += h;
                     pm[k] -= h;
                     let jx = 0.5 * (gamma(pp, q, i) - gamma(pm, q, i)) / (2.0 * h);
-                    assert!((jx - rows[i][k]).abs() < 1e-6, "Jx[{i}][{k}] {jx} vs {}", rows[i][k]);
+                    assert!(
+                        (jx - rows[i][k]).abs() < 1e-6,
+                        "Jx[{i}][{k}] {jx} vs {}",
+                        rows[i][k]
+                    );
                     let (mut qp, mut qm) = (q, q);
                     qp[k] += h;
                     qm[k] -= h;
                     let jq = -0.5 * (gamma(p, qp, i) - gamma(p, qm, i)) / (2.0 * h);
                     let expected = if i == k { rows[i][2] } else { 0.0 };
-                    assert!((jq - expected).abs() < 1e-6, "Jq[{i}][{k}] {jq} vs {expected}");
+                    assert!(
+                        (jq - expected).abs() < 1e-6,
+                        "Jq[{i}][{k}] {jq} vs {expected}"
+                    );
                 }
             }
         }
@@ -172,19 +180,35 @@ mod tests {
         let h = 1e-4;
         for (p, v, a) in random_states(400) {
             let s = m.evaluate(p, v, a).unwrap();
-            let (qp, q0, qm) = (q_at(&m, p, v, a, h), q_at(&m, p, v, a, 0.0), q_at(&m, p, v, a, -h));
+            let (qp, q0, qm) = (
+                q_at(&m, p, v, a, h),
+                q_at(&m, p, v, a, 0.0),
+                q_at(&m, p, v, a, -h),
+            );
             for i in 0..3 {
                 let dq = (qp[i] - qm[i]) / (2.0 * h);
                 let ddq = (qp[i] - 2.0 * q0[i] + qm[i]) / (h * h);
-                assert!((dq - s.dq_mm_s[i]).abs() < 1e-4 * (1.0 + dq.abs()), "dq {dq} vs {}", s.dq_mm_s[i]);
+                assert!(
+                    (dq - s.dq_mm_s[i]).abs() < 1e-4 * (1.0 + dq.abs()),
+                    "dq {dq} vs {}",
+                    s.dq_mm_s[i]
+                );
                 // Truncation h²/12·q'''' grows with the acceleration scale.
                 let tol = 1e-4 * ddq.abs() + 1e-6 * (a.norm() + v.norm_squared());
-                assert!((ddq - s.ddq_mm_s2[i]).abs() < tol, "ddq {ddq} vs {}", s.ddq_mm_s2[i]);
+                assert!(
+                    (ddq - s.ddq_mm_s2[i]).abs() < tol,
+                    "ddq {ddq} vs {}",
+                    s.ddq_mm_s2[i]
+                );
                 // eq. 3: Jx ṗ = Jq q̇ with the differenced q̇.
                 let rows = m.jx_rows(m.platform_mm(p), s.q_mm);
                 let lhs = dot(rows[i], [v.x, v.y, v.z]);
                 let tol = 1e-6 * 215.0 * (v.norm() + dq.abs()) + 1e-9;
-                assert!((lhs - rows[i][2] * dq).abs() < tol, "{lhs} vs {}", rows[i][2] * dq);
+                assert!(
+                    (lhs - rows[i][2] * dq).abs() < tol,
+                    "{lhs} vs {}",
+                    rows[i][2] * dq
+                );
             }
         }
     }
@@ -199,7 +223,11 @@ mod tests {
         let h = 1e-4;
         for (p, v, a) in random_states(300) {
             let s = m.evaluate(p, v, a).unwrap();
-            let (qp, q0, qm) = (q_at(&m, p, v, a, h), q_at(&m, p, v, a, 0.0), q_at(&m, p, v, a, -h));
+            let (qp, q0, qm) = (
+                q_at(&m, p, v, a, h),
+                q_at(&m, p, v, a, 0.0),
+                q_at(&m, p, v, a, -h),
+            );
             let ddq = [0, 1, 2].map(|i| (qp[i] - 2.0 * q0[i] + qm[i]) / (h * h) * 1e-3);
             let pc = m.platform_mm(p).map(|x| x * 1e-3);
             let qs = q0.map(|x| x * 1e-3);
@@ -231,8 +259,16 @@ mod tests {
             let x = lhs.lu().solve(&rhs).unwrap();
             for i in 0..3 {
                 let (lam, q) = (x[i], x[3 + i]);
-                assert!((q - s.force_n[i]).abs() < 1e-5 * (1.0 + q.abs()), "Q{i} {q} vs {}", s.force_n[i]);
-                assert!((lam - s.lambda[i]).abs() < 1e-5 * (1.0 + lam.abs()), "λ{i} {lam} vs {}", s.lambda[i]);
+                assert!(
+                    (q - s.force_n[i]).abs() < 1e-5 * (1.0 + q.abs()),
+                    "Q{i} {q} vs {}",
+                    s.force_n[i]
+                );
+                assert!(
+                    (lam - s.lambda[i]).abs() < 1e-5 * (1.0 + lam.abs()),
+                    "λ{i} {lam} vs {}",
+                    s.lambda[i]
+                );
             }
         }
     }
@@ -255,11 +291,16 @@ mod tests {
             assert!((m.suspended_weight_n() - 13.4397).abs() < 1e-9);
             for p in workspace_points(&m) {
                 let f = m.static_forces_n(p).unwrap();
-                assert!((f.iter().sum::<f64>() - 13.4397).abs() < 1e-9, "{f:?} at {p:?}");
+                assert!(
+                    (f.iter().sum::<f64>() - 13.4397).abs() < 1e-9,
+                    "{f:?} at {p:?}"
+                );
             }
         }
         // Off centre the forces differ (the test above is not trivially symmetric).
-        let f = paper_equal_arms().static_forces_n(Vec3::new(60.0, 0.0, 0.0)).unwrap();
+        let f = paper_equal_arms()
+            .static_forces_n(Vec3::new(60.0, 0.0, 0.0))
+            .unwrap();
         assert!((f[0] - f[1]).abs() > 0.1);
     }
 
@@ -273,26 +314,36 @@ mod tests {
 
     impl Trajectory {
         fn random(rng: &mut Rng) -> Self {
-            let mut pick = |lo: f64, hi: f64| [[rng.range(lo, hi), rng.range(lo, hi)]; 3];
+            let mut pick =
+                |lo: f64, hi: f64| [(); 3].map(|()| [rng.range(lo, hi), rng.range(lo, hi)]);
             let amp = pick(5.0, 25.0);
             let omega = pick(2.0, 40.0);
             let phase = pick(0.0, 6.3);
-            let centre = Vec3::new(rng.range(-30.0, 30.0), rng.range(-30.0, 30.0), rng.range(60.0, 150.0));
-            Trajectory { centre, amp, omega, phase }
+            let centre = Vec3::new(
+                rng.range(-30.0, 30.0),
+                rng.range(-30.0, 30.0),
+                rng.range(60.0, 150.0),
+            );
+            Trajectory {
+                centre,
+                amp,
+                omega,
+                phase,
+            }
         }
         /// Position, velocity, acceleration at t.
         fn at(&self, t: f64) -> (Vec3, Vec3, Vec3) {
-            let mut out = [Vec3::zeros(); 3];
+            let (mut p, mut v, mut a) = (self.centre, Vec3::zeros(), Vec3::zeros());
             for k in 0..3 {
                 for j in 0..2 {
-                    let (a, w, f) = (self.amp[k][j], self.omega[k][j], self.phase[k][j]);
+                    let (amp, w, f) = (self.amp[k][j], self.omega[k][j], self.phase[k][j]);
                     let (s, c) = (w * t + f).sin_cos();
-                    out[0][k] += a * s;
-                    out[1][k] += a * w * c;
-                    out[2][k] -= a * w * w * s;
+                    p[k] += amp * s;
+                    v[k] += amp * w * c;
+                    a[k] -= amp * w * w * s;
                 }
             }
-            (self.centre + out[0], out[1], out[2])
+            (p, v, a)
         }
     }
 
@@ -332,7 +383,11 @@ mod tests {
             let jx = Matrix3::from_fn(|i, k| rows[i][k]);
             let sv = jx.singular_values();
             let k2 = sv.max() / sv.min();
-            assert!(s.jx_condition >= k2 * (1.0 - 1e-12) && s.jx_condition <= 3.0 * k2, "{} vs {k2}", s.jx_condition);
+            assert!(
+                s.jx_condition >= k2 * (1.0 - 1e-12) && s.jx_condition <= 3.0 * k2,
+                "{} vs {k2}",
+                s.jx_condition
+            );
         }
     }
 
@@ -355,7 +410,11 @@ mod tests {
         for k in 0..n {
             let t = k as f64 * 1e-6;
             let p = Vec3::new(50.0 * t.sin(), 40.0 * t.cos(), 0.2 + t);
-            let s = m.evaluate(std::hint::black_box(p), Vec3::new(100.0, 50.0, 0.0), Vec3::new(1000.0, -500.0, 0.0));
+            let s = m.evaluate(
+                std::hint::black_box(p),
+                Vec3::new(100.0, 50.0, 0.0),
+                Vec3::new(1000.0, -500.0, 0.0),
+            );
             acc += s.map_or(0.0, |s| s.force_n[0]);
         }
         let ns = start.elapsed().as_nanos() as f64 / n as f64;

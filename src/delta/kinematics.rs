@@ -32,7 +32,11 @@ pub(super) fn cofactors(r: &[[f64; 3]; 3]) -> ([[f64; 3]; 3], f64) {
 impl DeltaModel {
     /// Platform centre P of a nozzle position, mm.
     pub(super) fn platform_mm(&self, nozzle_mm: Vec3) -> [f64; 3] {
-        [nozzle_mm.x, nozzle_mm.y, nozzle_mm.z + self.nozzle_offset_mm]
+        [
+            nozzle_mm.x,
+            nozzle_mm.y,
+            nozzle_mm.z + self.nozzle_offset_mm,
+        ]
     }
 
     /// Inverse kinematics, eq. 6 with the '+' root (carriages above the platform): the
@@ -88,7 +92,9 @@ impl DeltaModel {
         // Subtracting sphere 1 from spheres 2 and 3 leaves two planes n_k·P = d_k.
         let n1 = [a[1][0] - a[0][0], a[1][1] - a[0][1], a[1][2] - a[0][2]];
         let n2 = [a[2][0] - a[0][0], a[2][1] - a[0][1], a[2][2] - a[0][2]];
-        let half = |i: usize| 0.5 * (dot(a[i], a[i]) - dot(a[0], a[0]) - self.arm2_mm2[i] + self.arm2_mm2[0]);
+        let half = |i: usize| {
+            0.5 * (dot(a[i], a[i]) - dot(a[0], a[0]) - self.arm2_mm2[i] + self.arm2_mm2[0])
+        };
         let (d1, d2) = (half(1), half(2));
         let u = cross(n1, n2);
         let uu = dot(u, u);
@@ -106,7 +112,11 @@ impl DeltaModel {
         }
         let root = disc.sqrt();
         let (s1, s2) = ((-wu - root) / uu, (-wu + root) / uu);
-        let s = if p0[2] + s1 * u[2] <= p0[2] + s2 * u[2] { s1 } else { s2 };
+        let s = if p0[2] + s1 * u[2] <= p0[2] + s2 * u[2] {
+            s1
+        } else {
+            s2
+        };
         let mut p = [0, 1, 2].map(|k| p0[k] + s * u[k]);
         for _ in 0..2 {
             let rows = [0, 1, 2].map(|i| [p[0] - a[i][0], p[1] - a[i][1], p[2] - a[i][2]]);
@@ -119,7 +129,9 @@ impl DeltaModel {
                 p[k] -= (c[0][k] * f[0] + c[1][k] * f[1] + c[2][k] * f[2]) / det;
             }
         }
-        if !p.iter().all(|v| v.is_finite()) || (0..3).any(|i| q_mm[i] - p[2] < MIN_RADICAND_MM2.sqrt()) {
+        if !p.iter().all(|v| v.is_finite())
+            || (0..3).any(|i| q_mm[i] - p[2] < MIN_RADICAND_MM2.sqrt())
+        {
             return Err(none);
         }
         Ok(Vec3::new(p[0], p[1], p[2] - self.nozzle_offset_mm))

@@ -130,9 +130,17 @@ mod tests {
             let r = machine.slow_radius_mm(ratio);
             // Shortest arm (214.5 mm) is tower C's in the fixture.
             let s = m
-                .evaluate(Vec3::new(0.0, -r, 0.0), Vec3::new(0.0, -1.0, 0.0), Vec3::zeros())
+                .evaluate(
+                    Vec3::new(0.0, -r, 0.0),
+                    Vec3::new(0.0, -1.0, 0.0),
+                    Vec3::zeros(),
+                )
                 .unwrap();
-            assert!((s.dq_mm_s[2].abs() - ratio).abs() < 1e-9, "{ratio}: {:?}", s.dq_mm_s);
+            assert!(
+                (s.dq_mm_s[2].abs() - ratio).abs() < 1e-9,
+                "{ratio}: {:?}",
+                s.dq_mm_s
+            );
         }
         // Hand-computed: 3·√(214.5²/10) − 105.
         assert!((machine.slow_radius_mm(3.0) - 98.492_567).abs() < 1e-5);
