@@ -61,32 +61,36 @@ impl DeltaModel {
         let g = self.gravity_m_s2;
         // Jx⁻ᵀ (p̈ + g e_z), in 1/mm · m/s² (eq. 13-14).
         let b = [a[0] * MM, a[1] * MM, a[2] * MM + g];
-        let w = [0, 1, 2].map(|i| dot(cof[i], b) / det);
+        let inv_det = 1.0 / det;
+        let w = [0, 1, 2].map(|i| dot(cof[i], b) * inv_det);
         let mut dq = [0.0; 3];
         let mut ddq = [0.0; 3];
         let mut force = [0.0; 3];
         let mut lambda = [0.0; 3];
         for i in 0..3 {
             let jq = rows[i][2]; // q_i − z_P > 0
+            let inv_jq = 1.0 / jq;
             // eq. 7: q̇_i = (Jx ṗ)_i / Jq_ii.
-            dq[i] = dot(rows[i], v) / jq;
+            dq[i] = dot(rows[i], v) * inv_jq;
             // eq. 8: q̈_i = ((Jx p̈)_i − (ẋ² + ẏ² + (ż − q̇_i)²)) / Jq_ii.
             let dz = v[2] - dq[i];
-            ddq[i] = (dot(rows[i], a) - (v[0] * v[0] + v[1] * v[1] + dz * dz)) / jq;
+            ddq[i] = (dot(rows[i], a) - (v[0] * v[0] + v[1] * v[1] + dz * dz)) * inv_jq;
             // eq. 14 (Jq Jx⁻ᵀ is dimensionless: mm · 1/mm).
             force[i] = self.carriage_kg * (ddq[i] * MM + g) + self.platform_kg * jq * w[i];
             // eq. 13, Jx in m: Jx⁻ᵀ in 1/m = 1000 × its value in 1/mm.
             lambda[i] = 0.5 * self.platform_kg * w[i] / MM;
         }
         let (mc, mp) = (self.carriage_kg, self.platform_kg);
-        let sum = |f: &dyn Fn(usize) -> f64| f(0) + f(1) + f(2);
-        let kinetic_j = 0.5 * (mc * sum(&|i| dq[i] * dq[i]) + mp * dot(v, v)) * MM * MM;
-        let potential_j = g * (mc * sum(&|i| q[i]) + mp * p[2]) * MM;
-        let power_w = sum(&|i| force[i] * dq[i]) * MM;
-        let energy_rate_w = (mc * sum(&|i| dq[i] * ddq[i]) + mp * dot(v, a)) * MM * MM
-            + g * (mc * sum(&|i| dq[i]) + mp * v[2]) * MM;
+        let ones = [1.0; 3];
+        let kinetic_j = 0.5 * (mc * dot(dq, dq) + mp * dot(v, v)) * MM * MM;
+        let potential_j = g * (mc * dot(q, ones) + mp * p[2]) * MM;
+        let power_w = dot(force, dq) * MM;
+        // eq. 20, left side: d/dt of the two lines above.
+        let energy_rate_w = (mc * dot(dq, ddq) + mp * dot(v, a)) * MM * MM
+            + g * (mc * dot(dq, ones) + mp * v[2]) * MM;
         let arm2_sum = self.arm2_mm2[0] + self.arm2_mm2[1] + self.arm2_mm2[2];
-        let inv_f2 = sum(&|i| dot(cof[i], cof[i])) / (det * det);
+        let inv_f2 =
+            (dot(cof[0], cof[0]) + dot(cof[1], cof[1]) + dot(cof[2], cof[2])) * inv_det * inv_det;
         Ok(DynState {
             q_mm: q,
             dq_mm_s: dq,
@@ -404,20 +408,34 @@ mod tests {
     #[ignore]
     fn evaluate_speed() {
         let m = kossel();
-        let n = 10_000_000;
+        let states = random_states(1000);
+        let rounds = 10_000;
+        // CPU time of this thread (ns), so a loaded machine does not inflate the figure.
+        let cpu_ns = || {
+            std::fs::read_to_string("/proc/thread-self/schedstat")
+                .ok()
+                .and_then(|s| s.split_whitespace().next()?.parse::<f64>().ok())
+        };
+        let cpu0 = cpu_ns();
         let start = std::time::Instant::now();
         let mut acc = 0.0;
-        for k in 0..n {
-            let t = k as f64 * 1e-6;
-            let p = Vec3::new(50.0 * t.sin(), 40.0 * t.cos(), 0.2 + t);
-            let s = m.evaluate(
-                std::hint::black_box(p),
-                Vec3::new(100.0, 50.0, 0.0),
-                Vec3::new(1000.0, -500.0, 0.0),
-            );
-            acc += s.map_or(0.0, |s| s.force_n[0]);
+        for _ in 0..rounds {
+            for &(p, v, a) in &states {
+                let s = m.evaluate(std::hint::black_box(p), v, a);
+                acc += s.map_or(0.0, |s| s.force_n[0]);
+            }
         }
-        let ns = start.elapsed().as_nanos() as f64 / n as f64;
-        println!("evaluate: {ns:.1} ns per call (includes ~sin/cos of the loop) {acc}");
+        let calls = (rounds * states.len()) as f64;
+        let ns = start.elapsed().as_nanos() as f64 / calls;
+        let cpu = cpu0.zip(cpu_ns()).map(|(a, b)| (b - a) / calls);
+        println!("evaluate: {ns:.1} ns per call wall, {cpu:.1?} ns CPU ({acc})");
+        let cpu0 = cpu_ns();
+        for _ in 0..rounds {
+            for &(p, _, _) in &states {
+                acc += m.inverse(std::hint::black_box(p)).map_or(0.0, |q| q[0]);
+            }
+        }
+        let cpu = cpu0.zip(cpu_ns()).map(|(a, b)| (b - a) / calls);
+        println!("inverse: {cpu:.1?} ns CPU ({acc})");
     }
 }

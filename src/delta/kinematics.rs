@@ -46,29 +46,48 @@ impl DeltaModel {
         if !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite()) {
             return Err(Unreachable::NotFinite);
         }
-        let mut q = [0.0; 3];
-        for (i, qi) in q.iter_mut().enumerate() {
+        // Branch-free over the towers (the compiler pairs the square roots); the error
+        // details are worked out only on the cold path.
+        let radicand = [0, 1, 2].map(|i| {
             let dx = p[0] - self.towers_mm[i][0];
             let dy = p[1] - self.towers_mm[i][1];
-            let h2 = dx * dx + dy * dy;
-            let radicand = self.arm2_mm2[i] - h2;
-            if radicand < MIN_RADICAND_MM2 {
-                return Err(Unreachable::ArmTooShort {
-                    tower: i,
-                    horizontal_mm: h2.sqrt(),
-                    arm_mm: self.arm_mm[i],
-                });
-            }
-            *qi = p[2] + radicand.sqrt();
-            let over = *qi - self.top_mm[i];
-            if over > TOP_TOLERANCE_MM {
-                return Err(Unreachable::AboveTop {
-                    tower: i,
-                    over_mm: over,
-                });
-            }
+            self.arm2_mm2[i] - (dx * dx + dy * dy)
+        });
+        if radicand.iter().any(|&r| r < MIN_RADICAND_MM2) {
+            return Err(self.arm_too_short(p, radicand));
+        }
+        let q = [0, 1, 2].map(|i| p[2] + radicand[i].sqrt());
+        if (0..3).any(|i| q[i] - self.top_mm[i] > TOP_TOLERANCE_MM) {
+            return Err(self.above_top(q));
         }
         Ok(q)
+    }
+
+    #[cold]
+    fn arm_too_short(&self, p: [f64; 3], radicand: [f64; 3]) -> Unreachable {
+        let tower = (0..3)
+            .find(|&i| radicand[i] < MIN_RADICAND_MM2)
+            .unwrap_or_default();
+        let (dx, dy) = (
+            p[0] - self.towers_mm[tower][0],
+            p[1] - self.towers_mm[tower][1],
+        );
+        Unreachable::ArmTooShort {
+            tower,
+            horizontal_mm: dx.hypot(dy),
+            arm_mm: self.arm_mm[tower],
+        }
+    }
+
+    #[cold]
+    fn above_top(&self, q: [f64; 3]) -> Unreachable {
+        let tower = (0..3)
+            .find(|&i| q[i] - self.top_mm[i] > TOP_TOLERANCE_MM)
+            .unwrap_or_default();
+        Unreachable::AboveTop {
+            tower,
+            over_mm: q[tower] - self.top_mm[tower],
+        }
     }
 
     /// Rows of Jx (eq. 3): r_i = A_i − P = (B_i,x − x_P, B_i,y − y_P, q_i − z_P), mm. With
