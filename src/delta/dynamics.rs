@@ -62,7 +62,11 @@ impl DeltaModel {
         // Jx⁻ᵀ (p̈ + g e_z), in 1/mm · m/s² (eq. 13-14).
         let b = [a[0] * MM, a[1] * MM, a[2] * MM + g];
         let inv_det = 1.0 / det;
-        let w = [0, 1, 2].map(|i| dot(cof[i], b) * inv_det);
+        let w = [
+            dot(cof[0], b) * inv_det,
+            dot(cof[1], b) * inv_det,
+            dot(cof[2], b) * inv_det,
+        ];
         let mut dq = [0.0; 3];
         let mut ddq = [0.0; 3];
         let mut force = [0.0; 3];

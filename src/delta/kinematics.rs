@@ -10,10 +10,12 @@ const MIN_RADICAND_MM2: f64 = 1e-9;
 /// Tolerance on the top of carriage travel, mm (rounding at the homed position).
 const TOP_TOLERANCE_MM: f64 = 1e-6;
 
+#[inline]
 pub(super) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
+#[inline]
 pub(super) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [
         a[1] * b[2] - a[2] * b[1],
@@ -24,6 +26,7 @@ pub(super) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
 
 /// The rows' cross products (r2×r3, r3×r1, r1×r2) and the determinant r1·(r2×r3) of the
 /// 3×3 matrix with rows `r`: M⁻¹ has columns c_i/det, so M⁻ᵀ has rows c_i/det.
+#[inline]
 pub(super) fn cofactors(r: &[[f64; 3]; 3]) -> ([[f64; 3]; 3], f64) {
     let c = [cross(r[1], r[2]), cross(r[2], r[0]), cross(r[0], r[1])];
     (c, dot(r[0], c[0]))
@@ -41,6 +44,7 @@ impl DeltaModel {
 
     /// Inverse kinematics, eq. 6 with the '+' root (carriages above the platform): the
     /// heights q_i of the carriage joints A_i, mm.
+    #[inline(always)]
     pub fn inverse(&self, nozzle_mm: Vec3) -> Result<[f64; 3], Unreachable> {
         let p = self.platform_mm(nozzle_mm);
         if !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite()) {
@@ -48,15 +52,21 @@ impl DeltaModel {
         }
         // Branch-free over the towers (the compiler pairs the square roots); the error
         // details are worked out only on the cold path.
-        let radicand = [0, 1, 2].map(|i| {
+        let radicand_of = |i: usize| {
             let dx = p[0] - self.towers_mm[i][0];
             let dy = p[1] - self.towers_mm[i][1];
             self.arm2_mm2[i] - (dx * dx + dy * dy)
-        });
+        };
+        // Written out: `[T; N]::map` is not reliably inlined.
+        let radicand = [radicand_of(0), radicand_of(1), radicand_of(2)];
         if radicand.iter().any(|&r| r < MIN_RADICAND_MM2) {
             return Err(self.arm_too_short(p, radicand));
         }
-        let q = [0, 1, 2].map(|i| p[2] + radicand[i].sqrt());
+        let q = [
+            p[2] + radicand[0].sqrt(),
+            p[2] + radicand[1].sqrt(),
+            p[2] + radicand[2].sqrt(),
+        ];
         if (0..3).any(|i| q[i] - self.top_mm[i] > TOP_TOLERANCE_MM) {
             return Err(self.above_top(q));
         }
@@ -93,9 +103,11 @@ impl DeltaModel {
     /// Rows of Jx (eq. 3): r_i = A_i − P = (B_i,x − x_P, B_i,y − y_P, q_i − z_P), mm. With
     /// Γ_i = l_i² − |P − A_i|², Jx = ½ ∂Γ/∂p and Jq = −½ ∂Γ/∂q = diag(q_i − z_P) = diag of the
     /// rows' third components; these signs give eq. 8 and eq. 13-14 exactly as printed.
+    #[inline]
     pub(super) fn jx_rows(&self, p: [f64; 3], q: [f64; 3]) -> [[f64; 3]; 3] {
         let t = &self.towers_mm;
-        [0, 1, 2].map(|i| [t[i][0] - p[0], t[i][1] - p[1], q[i] - p[2]])
+        let row = |i: usize| [t[i][0] - p[0], t[i][1] - p[1], q[i] - p[2]];
+        [row(0), row(1), row(2)]
     }
 
     /// Direct kinematics: the nozzle position for carriage heights `q_mm`, by three-sphere
