@@ -178,7 +178,7 @@ mod tests {
     fn inverse_then_forward_round_trip_over_the_workspace() {
         let m = kossel();
         let mut n = 0;
-        for p in workspace_points(&m) {
+        for p in workspace_points() {
             let q = m.inverse(p).unwrap();
             let back = m.forward(q).unwrap();
             assert!((back - p).norm() < 1e-9, "{p:?} -> {q:?} -> {back:?}");
@@ -193,7 +193,7 @@ mod tests {
         let m = kossel();
         let r = 105.0_f64;
         let s = r * 3f64.sqrt(); // s_B − s_P
-        for p in workspace_points(&m) {
+        for p in workspace_points() {
             let q = m.inverse(p).unwrap();
             let (x, y, z) = (p.x, p.y, p.z + 3.0);
             let g = [

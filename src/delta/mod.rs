@@ -81,6 +81,8 @@ pub struct DeltaModel {
     /// m_plat + 3 m_link (Fig. 2), kg.
     platform_kg: f64,
     gravity_m_s2: f64,
+    /// |det Jx| at or below which Jx counts as singular: 1e-9 · l_1 l_2 l_3, mm³.
+    singular_det_mm3: f64,
 }
 
 impl DeltaModel {
@@ -101,6 +103,7 @@ impl DeltaModel {
             carriage_kg: m.cart_kg + m.link_kg,
             platform_kg: m.platform_kg + 3.0 * m.link_kg,
             gravity_m_s2: machine.gravity_m_s2,
+            singular_det_mm3: 1e-9 * g.arm_length_mm.iter().product::<f64>(),
         };
         // With an infinite top the inverse cannot fail on AboveTop; an arm too short for
         // home leaves the top infinite (the profile validation reports that case).

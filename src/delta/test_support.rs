@@ -28,7 +28,7 @@ pub(crate) fn kossel() -> DeltaModel {
 }
 
 /// Points over the print disc (radius 85) from the bed up to 200 mm.
-pub(crate) fn workspace_points(_m: &DeltaModel) -> impl Iterator<Item = Vec3> {
+pub(crate) fn workspace_points() -> impl Iterator<Item = Vec3> {
     (0..=8).flat_map(|ring| {
         let r = 85.0 * ring as f64 / 8.0;
         (0..24).flat_map(move |k| {
