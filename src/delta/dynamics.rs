@@ -133,9 +133,9 @@ mod tests {
     /// Random states over the workspace: (position, velocity, acceleration).
     fn random_states(n: usize) -> Vec<(Vec3, Vec3, Vec3)> {
         let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
-        let m = kossel();
+        let all = workspace_points().count();
         workspace_points()
-            .take(n)
+            .step_by((all / n).max(1))
             .map(|p| {
                 let mut r3 =
                     |s: f64| Vec3::new(rng.range(-s, s), rng.range(-s, s), rng.range(-s, s));
