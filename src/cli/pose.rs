@@ -1,8 +1,136 @@
+//! `delta-gcode pose`: the model at one nozzle state, or the direct kinematics of three
+//! carriage heights.
+
+use std::path::PathBuf;
 use std::process::ExitCode;
 
-#[derive(clap::Args, Debug)]
-pub struct Args {}
+use anyhow::Context;
+use serde_json::json;
 
-pub fn run(_args: &Args) -> anyhow::Result<ExitCode> {
-    todo!()
+use crate::delta::DeltaModel;
+use crate::machine::{Machine, TOWER_NAMES};
+use crate::path::Vec3;
+
+/// Output format of the model commands.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    Text,
+    Json,
+}
+
+#[derive(clap::Args, Debug)]
+#[command(allow_negative_numbers = true)]
+pub struct Args {
+    /// Machine profile (YAML).
+    #[arg(long, value_name = "M.yaml")]
+    pub machine: PathBuf,
+    /// Nozzle position X Y Z, mm (bed frame).
+    #[arg(
+        num_args = 3,
+        value_names = ["X", "Y", "Z"],
+        required_unless_present = "carriages",
+        conflicts_with = "carriages"
+    )]
+    pub position: Vec<f64>,
+    /// Nozzle velocity, mm/s.
+    #[arg(long, value_name = "VX,VY,VZ", value_parser = parse_triple, allow_hyphen_values = true)]
+    pub velocity: Option<[f64; 3]>,
+    /// Nozzle acceleration, mm/s².
+    #[arg(long, value_name = "AX,AY,AZ", value_parser = parse_triple, allow_hyphen_values = true)]
+    pub accel: Option<[f64; 3]>,
+    /// Carriage heights Q1,Q2,Q3 (mm): run the direct kinematics instead.
+    #[arg(
+        long,
+        value_name = "Q1,Q2,Q3",
+        value_parser = parse_triple,
+        allow_hyphen_values = true,
+        conflicts_with_all = ["velocity", "accel"]
+    )]
+    pub carriages: Option<[f64; 3]>,
+    #[arg(long, value_enum, default_value_t = Format::Text)]
+    pub format: Format,
+}
+
+/// Parses "a,b,c" into three finite numbers.
+fn parse_triple(s: &str) -> Result<[f64; 3], String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let [a, b, c] = parts[..] else {
+        return Err(format!(
+            "expected three comma-separated numbers, found {s:?}"
+        ));
+    };
+    let num = |t: &str| match t.parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        _ => Err(format!("{t:?} is not a finite number")),
+    };
+    Ok([num(a)?, num(b)?, num(c)?])
+}
+
+pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
+    let machine = Machine::load(&args.machine)?;
+    let model = DeltaModel::new(&machine);
+    if let Some(q) = args.carriages {
+        let p = model
+            .forward(q)
+            .context("the carriage heights have no nozzle position")?;
+        match args.format {
+            Format::Json => println!("{}", json!({"q_mm": q, "position_mm": [p.x, p.y, p.z]})),
+            Format::Text => {
+                println!("machine: {}", machine.name);
+                println!("carriages (mm): {:.4} {:.4} {:.4}", q[0], q[1], q[2]);
+                println!("position_mm: x {:.4}  y {:.4}  z {:.4}", p.x, p.y, p.z);
+            }
+        }
+        return Ok(ExitCode::SUCCESS);
+    }
+    let [x, y, z] = args.position[..] else {
+        anyhow::bail!("expected the nozzle position X Y Z");
+    };
+    if ![x, y, z].iter().all(|v| v.is_finite()) {
+        anyhow::bail!("the nozzle position must be finite numbers");
+    }
+    let pos = Vec3::new(x, y, z);
+    let vel = Vec3::from(args.velocity.unwrap_or_default());
+    let acc = Vec3::from(args.accel.unwrap_or_default());
+    let s = model
+        .evaluate(pos, vel, acc)
+        .with_context(|| format!("nozzle position ({x}, {y}, {z}) mm is unreachable"))?;
+    match args.format {
+        Format::Json => println!("{}", serde_json::to_string(&s)?),
+        Format::Text => {
+            println!("machine: {}", machine.name);
+            println!(
+                "nozzle mm: {x:.4} {y:.4} {z:.4}   mm/s: {:.3} {:.3} {:.3}   mm/s²: {:.1} {:.1} {:.1}",
+                vel.x, vel.y, vel.z, acc.x, acc.y, acc.z
+            );
+            println!(
+                "{:<22}{:>14}{:>14}{:>14}",
+                "tower", TOWER_NAMES[0], TOWER_NAMES[1], TOWER_NAMES[2]
+            );
+            let rows: [(&str, [f64; 3]); 5] = [
+                ("carriage q (mm)", s.q_mm),
+                ("velocity dq (mm/s)", s.dq_mm_s),
+                ("accel ddq (mm/s²)", s.ddq_mm_s2),
+                ("force Q (N)", s.force_n),
+                ("lambda (N/m)", s.lambda),
+            ];
+            for (label, v) in rows {
+                println!("{label:<22}{:>14.4}{:>14.4}{:>14.4}", v[0], v[1], v[2]);
+            }
+            println!(
+                "power ΣQ·dq: {:.6} W   d(K+U)/dt: {:.6} W",
+                s.power_w, s.energy_rate_w
+            );
+            println!(
+                "kinetic: {:.6} J   potential: {:.6} J",
+                s.kinetic_j, s.potential_j
+            );
+            println!("Jx condition (Frobenius): {:.3}", s.jx_condition);
+            let limit = machine.motors.max_force_n;
+            if s.force_n.iter().any(|f| f.abs() > limit) {
+                println!("over the motor limit of {limit} N");
+            }
+        }
+    }
+    Ok(ExitCode::SUCCESS)
 }

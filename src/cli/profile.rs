@@ -1,8 +1,122 @@
+//! `delta-gcode machine`: validates a machine profile and prints its derived figures.
+
+use std::path::PathBuf;
 use std::process::ExitCode;
 
-#[derive(clap::Args, Debug)]
-pub struct Args {}
+use serde_json::json;
 
-pub fn run(_args: &Args) -> anyhow::Result<ExitCode> {
-    todo!()
+use super::pose::Format;
+use crate::delta::DeltaModel;
+use crate::machine::{Machine, TOWER_NAMES};
+use crate::path::Vec3;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Machine profile (YAML).
+    #[arg(value_name = "M.yaml")]
+    pub profile: PathBuf,
+    #[arg(long, value_enum, default_value_t = Format::Text)]
+    pub format: Format,
+}
+
+/// Klipper's delta.py SLOW_RATIO: half speed beyond it, quarter speed beyond twice it.
+const SLOW_RATIO: f64 = 3.0;
+
+pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
+    let machine = Machine::load(&args.profile)?;
+    let model = DeltaModel::new(&machine);
+    let g = &machine.geometry;
+    let centre = model.static_forces_n(Vec3::zeros())?;
+    let (max_static, max_at, max_tower) = model
+        .max_static_force_n(g.print_radius_mm)
+        .ok_or_else(|| anyhow::anyhow!("the print disc is unreachable"))?;
+    let home_q = model.home_carriages_mm();
+    let reach_bed = model.reachable_radius_mm(0.0);
+    let reach_home = model.reachable_radius_mm(g.home_z_mm);
+    let full_disc_top = model.full_disc_top_mm(g.print_radius_mm);
+    let slow = machine.slow_radius_mm(SLOW_RATIO);
+    let very_slow = machine.slow_radius_mm(2.0 * SLOW_RATIO);
+    let weight = model.suspended_weight_n();
+    let limit = machine.motors.max_force_n;
+    match args.format {
+        Format::Json => {
+            let v = json!({
+                "name": machine.name,
+                "delta_radius_mm": g.delta_radius_mm,
+                "reachable_radius_bed_mm": reach_bed,
+                "reachable_radius_home_mm": reach_home,
+                "full_print_disc_up_to_z_mm": full_disc_top,
+                "home_carriages_mm": home_q,
+                "static_force_centre_n": centre,
+                "max_static_force_n": max_static,
+                "max_static_force_at_mm": [max_at.x, max_at.y],
+                "max_static_force_tower": max_tower + 1,
+                "suspended_weight_n": weight,
+                "slow_radius_mm": slow,
+                "very_slow_radius_mm": very_slow,
+                "edge_slowdown": machine.limits.edge_slowdown,
+                "max_extrude_only_velocity_mm_s": machine.extruder.max_extrude_only_velocity_mm_s,
+                "max_extrude_only_accel_mm_s2": machine.extruder.max_extrude_only_accel_mm_s2,
+                "max_force_n": limit,
+            });
+            println!("{v}");
+        }
+        Format::Text => {
+            let l = &machine.limits;
+            let e = &machine.extruder;
+            println!("{}: profile OK ({})", machine.name, args.profile.display());
+            println!(
+                "geometry: delta radius {:.3} mm, arms {:.3}/{:.3}/{:.3} mm, nozzle offset {:.3} mm",
+                g.delta_radius_mm,
+                g.arm_length_mm[0],
+                g.arm_length_mm[1],
+                g.arm_length_mm[2],
+                g.nozzle_offset_mm
+            );
+            println!(
+                "reachable radius: {reach_bed:.2} mm at the bed, {reach_home:.2} mm at home z = {:.2} mm; \
+                 the print disc (r = {:.2} mm) is whole up to z = {full_disc_top:.2} mm",
+                g.home_z_mm, g.print_radius_mm
+            );
+            println!(
+                "home carriages: {:.3} / {:.3} / {:.3} mm (towers A/B/C)",
+                home_q[0], home_q[1], home_q[2]
+            );
+            println!(
+                "static force at the centre (eq. 16): {:.3} / {:.3} / {:.3} N",
+                centre[0], centre[1], centre[2]
+            );
+            println!(
+                "largest static force on the print disc (eq. 15): {max_static:.3} N, tower {} at ({:.1}, {:.1}) mm",
+                TOWER_NAMES[max_tower], max_at.x, max_at.y
+            );
+            println!("suspended weight (eq. 17): {weight:.3} N");
+            println!(
+                "edge slowdown (Klipper delta.py){}: half speed beyond r = {slow:.2} mm, quarter beyond r = {very_slow:.2} mm",
+                if l.edge_slowdown { "" } else { ", disabled" }
+            );
+            println!(
+                "limits: {} mm/s, {} mm/s², z {} mm/s, {} mm/s², square corner {} mm/s, min cruise ratio {}",
+                l.max_velocity_mm_s,
+                l.max_accel_mm_s2,
+                l.max_z_velocity_mm_s,
+                l.max_z_accel_mm_s2,
+                l.square_corner_velocity_mm_s,
+                l.minimum_cruise_ratio
+            );
+            println!(
+                "extruder: extrude-only {:.2} mm/s, {:.1} mm/s², corner {} mm/s",
+                e.max_extrude_only_velocity_mm_s,
+                e.max_extrude_only_accel_mm_s2,
+                e.instantaneous_corner_velocity_mm_s
+            );
+            println!(
+                "motor limit: {limit} N per carriage ({:.0} % used by the worst static pose); sampling {} s; g = {} m/s²",
+                100.0 * max_static / limit,
+                machine.sampling.period_s,
+                machine.gravity_m_s2
+            );
+        }
+    }
+    Ok(ExitCode::SUCCESS)
 }

@@ -1,2 +1,123 @@
 //! The prismatic delta robot of the paper: kinematics (eq. 2-8) and the Lagrangian
 //! dynamics (eq. 9-14), statics (eq. 15-17) and energy (eq. 20).
+//!
+//! Conventions (see docs/model.md): bed frame, Z up, bed at z = 0, X from tower A to
+//! tower B; towers A, B, C are the paper's 1, 2, 3. Positions in mm at the interface; the
+//! dynamics works in SI inside. The carriages sit above the platform (the '+' root of
+//! eq. 6). The platform centre P is the nozzle plus (0, 0, PQ).
+
+mod dynamics;
+mod kinematics;
+mod statics;
+
+pub use dynamics::DynState;
+
+use crate::machine::{Machine, TOWER_NAMES};
+
+/// Why a nozzle position or a set of carriage heights has no configuration.
+#[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
+pub enum Unreachable {
+    /// Negative (or zero) radicand of eq. 6: the nozzle is farther from the tower than the
+    /// arm reaches horizontally.
+    #[error(
+        "tower {}: arm too short, the platform is {horizontal_mm:.3} mm from the tower \
+         but the arm is {arm_mm:.3} mm long",
+        TOWER_NAMES[*tower]
+    )]
+    ArmTooShort {
+        tower: usize,
+        horizontal_mm: f64,
+        arm_mm: f64,
+    },
+    /// The carriage would have to rise above its homed (endstop) height.
+    #[error(
+        "tower {}: carriage would be {over_mm:.3} mm above its top (homed) position",
+        TOWER_NAMES[*tower]
+    )]
+    AboveTop { tower: usize, over_mm: f64 },
+    /// Jx is singular (arms coplanar): the platform is not held.
+    #[error("the arms are coplanar (Jx singular)")]
+    Singular,
+    /// Forward kinematics: the three spheres do not meet with the carriages above the
+    /// platform.
+    #[error(
+        "carriage heights {:.3}, {:.3}, {:.3} mm: no platform position (the arms cannot meet)",
+        q_mm[0], q_mm[1], q_mm[2]
+    )]
+    NoForwardSolution { q_mm: [f64; 3] },
+    /// A coordinate is NaN or infinite.
+    #[error("a coordinate is not a finite number")]
+    NotFinite,
+}
+
+impl Unreachable {
+    /// The tower at fault (0 = A), when one is.
+    pub fn tower(&self) -> Option<usize> {
+        match *self {
+            Unreachable::ArmTooShort { tower, .. } | Unreachable::AboveTop { tower, .. } => {
+                Some(tower)
+            }
+            _ => None,
+        }
+    }
+}
+
+/// The delta robot of one machine profile: geometry and lumped masses (Fig. 2). Plain data,
+/// `Copy`; every method works on the stack.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DeltaModel {
+    /// Horizontal position of each tower's carriage joint line, reduced by the platform
+    /// joint offset: (B_i − P_i offset) in the paper, mm.
+    towers_mm: [[f64; 2]; 3],
+    delta_radius_mm: f64,
+    arm_mm: [f64; 3],
+    arm2_mm2: [f64; 3],
+    /// PQ, mm.
+    nozzle_offset_mm: f64,
+    /// Carriage heights at G28 home, the top of their travel, mm.
+    top_mm: [f64; 3],
+    /// m_cart + m_link (Fig. 2), kg.
+    carriage_kg: f64,
+    /// m_plat + 3 m_link (Fig. 2), kg.
+    platform_kg: f64,
+    gravity_m_s2: f64,
+    /// |det Jx| at or below which Jx counts as singular: 1e-9 · l_1 l_2 l_3, mm³.
+    singular_det_mm3: f64,
+}
+
+impl DeltaModel {
+    pub fn new(machine: &Machine) -> DeltaModel {
+        let g = &machine.geometry;
+        let m = &machine.masses;
+        let towers_mm = g.tower_angles_deg.map(|a| {
+            let (s, c) = a.to_radians().sin_cos();
+            [g.delta_radius_mm * c, g.delta_radius_mm * s]
+        });
+        let mut model = DeltaModel {
+            towers_mm,
+            delta_radius_mm: g.delta_radius_mm,
+            arm_mm: g.arm_length_mm,
+            arm2_mm2: g.arm_length_mm.map(|l| l * l),
+            nozzle_offset_mm: g.nozzle_offset_mm,
+            top_mm: [f64::INFINITY; 3],
+            carriage_kg: m.cart_kg + m.link_kg,
+            platform_kg: m.platform_kg + 3.0 * m.link_kg,
+            gravity_m_s2: machine.gravity_m_s2,
+            singular_det_mm3: 1e-9 * g.arm_length_mm.iter().product::<f64>(),
+        };
+        // With an infinite top the inverse cannot fail on AboveTop; an arm too short for
+        // home leaves the top infinite (the profile validation reports that case).
+        if let Ok(top) = model.inverse(crate::path::Vec3::new(0.0, 0.0, g.home_z_mm)) {
+            model.top_mm = top;
+        }
+        model
+    }
+
+    /// Carriage heights at G28 home, nozzle at (0, 0, home_z), mm.
+    pub fn home_carriages_mm(&self) -> [f64; 3] {
+        self.top_mm
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod test_support;

@@ -1,0 +1,446 @@
+//! Velocities and accelerations of the carriages (eq. 7-8), the Lagrange multipliers and
+//! actuator forces (eq. 13-14), energy and power (eq. 20).
+
+use serde::Serialize;
+
+use super::kinematics::{cofactors, dot};
+use super::{DeltaModel, Unreachable};
+use crate::path::Vec3;
+
+const MM: f64 = 1e-3;
+
+/// The model at one nozzle state. Carriage quantities in mm, mm/s, mm/s²; forces in N;
+/// λ in N/m (the closure equations Γ_i are in m²); energies in J, powers in W.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct DynState {
+    /// Carriage heights (eq. 6), mm.
+    pub q_mm: [f64; 3],
+    /// Carriage velocities (eq. 7), mm/s.
+    pub dq_mm_s: [f64; 3],
+    /// Carriage accelerations (eq. 8), mm/s².
+    pub ddq_mm_s2: [f64; 3],
+    /// Actuator forces Q_i (eq. 14), N, positive upwards.
+    pub force_n: [f64; 3],
+    /// Lagrange multipliers λ_i (eq. 13), N/m.
+    pub lambda: [f64; 3],
+    /// Kinetic energy of the lumped masses, J.
+    pub kinetic_j: f64,
+    /// Potential energy, bed (z = 0) reference, J.
+    pub potential_j: f64,
+    /// Σ Q_i q̇_i, the right side of eq. 20, W.
+    pub power_w: f64,
+    /// d(K + U)/dt from the kinematics alone, the left side of eq. 20, W.
+    pub energy_rate_w: f64,
+    /// Condition number of Jx in the Frobenius norm, ‖Jx‖_F·‖Jx⁻¹‖_F (between κ₂ and 3κ₂).
+    pub jx_condition: f64,
+}
+
+impl DeltaModel {
+    /// The full model at a nozzle position, velocity and acceleration (mm, mm/s, mm/s²).
+    /// Closed forms throughout: Jq is diagonal, and Jx⁻ᵀ comes from the cross products of
+    /// Jx's rows (the arm vectors), so nothing is factorised or allocated.
+    pub fn evaluate(
+        &self,
+        pos_mm: Vec3,
+        vel_mm_s: Vec3,
+        acc_mm_s2: Vec3,
+    ) -> Result<DynState, Unreachable> {
+        let q = self.inverse(pos_mm)?;
+        let p = self.platform_mm(pos_mm);
+        let v = [vel_mm_s.x, vel_mm_s.y, vel_mm_s.z];
+        let a = [acc_mm_s2.x, acc_mm_s2.y, acc_mm_s2.z];
+        // A NaN or infinity anywhere makes the sum non-finite (so does a sum beyond 1e308,
+        // which no printer asks for): one test instead of six.
+        if !(v[0] + v[1] + v[2] + a[0] + a[1] + a[2]).is_finite() {
+            return Err(Unreachable::NotFinite);
+        }
+        let rows = self.jx_rows(p, q);
+        let (cof, det) = cofactors(&rows);
+        if det.abs() <= self.singular_det_mm3 {
+            return Err(Unreachable::Singular);
+        }
+        let g = self.gravity_m_s2;
+        // Jx⁻ᵀ (p̈ + g e_z), in 1/mm · m/s² (eq. 13-14).
+        let b = [a[0] * MM, a[1] * MM, a[2] * MM + g];
+        let inv_det = 1.0 / det;
+        let w = [
+            dot(cof[0], b) * inv_det,
+            dot(cof[1], b) * inv_det,
+            dot(cof[2], b) * inv_det,
+        ];
+        let mut dq = [0.0; 3];
+        let mut ddq = [0.0; 3];
+        let mut force = [0.0; 3];
+        let mut lambda = [0.0; 3];
+        for i in 0..3 {
+            let jq = rows[i][2]; // q_i − z_P > 0
+            let inv_jq = 1.0 / jq;
+            // eq. 7: q̇_i = (Jx ṗ)_i / Jq_ii.
+            dq[i] = dot(rows[i], v) * inv_jq;
+            // eq. 8: q̈_i = ((Jx p̈)_i − (ẋ² + ẏ² + (ż − q̇_i)²)) / Jq_ii.
+            let dz = v[2] - dq[i];
+            ddq[i] = (dot(rows[i], a) - (v[0] * v[0] + v[1] * v[1] + dz * dz)) * inv_jq;
+            // eq. 14 (Jq Jx⁻ᵀ is dimensionless: mm · 1/mm).
+            force[i] = self.carriage_kg * (ddq[i] * MM + g) + self.platform_kg * jq * w[i];
+            // eq. 13, Jx in m: Jx⁻ᵀ in 1/m = 1000 × its value in 1/mm.
+            lambda[i] = 0.5 * self.platform_kg * w[i] / MM;
+        }
+        let (mc, mp) = (self.carriage_kg, self.platform_kg);
+        let ones = [1.0; 3];
+        let kinetic_j = 0.5 * (mc * dot(dq, dq) + mp * dot(v, v)) * MM * MM;
+        let potential_j = g * (mc * dot(q, ones) + mp * p[2]) * MM;
+        let power_w = dot(force, dq) * MM;
+        // eq. 20, left side: d/dt of the two lines above.
+        let energy_rate_w = (mc * dot(dq, ddq) + mp * dot(v, a)) * MM * MM
+            + g * (mc * dot(dq, ones) + mp * v[2]) * MM;
+        let arm2_sum = self.arm2_mm2[0] + self.arm2_mm2[1] + self.arm2_mm2[2];
+        let inv_f2 =
+            (dot(cof[0], cof[0]) + dot(cof[1], cof[1]) + dot(cof[2], cof[2])) * inv_det * inv_det;
+        Ok(DynState {
+            q_mm: q,
+            dq_mm_s: dq,
+            ddq_mm_s2: ddq,
+            force_n: force,
+            lambda,
+            kinetic_j,
+            potential_j,
+            power_w,
+            energy_rate_w,
+            jx_condition: (arm2_sum * inv_f2).sqrt(),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::{Matrix3, Matrix6, Vector6};
+
+    use super::super::test_support::{Rng, kossel, kossel_machine, workspace_points};
+    use super::*;
+    use crate::machine::Machine;
+
+    fn paper_equal_arms() -> DeltaModel {
+        let mut m: Machine = kossel_machine();
+        m.geometry.arm_length_mm = [215.0; 3];
+        DeltaModel::new(&m)
+    }
+
+    /// Nozzle on the parabola p0 + v t + a t²/2 and its carriage heights by eq. 6 alone.
+    fn q_at(m: &DeltaModel, p0: Vec3, v: Vec3, a: Vec3, t: f64) -> [f64; 3] {
+        m.inverse(p0 + v * t + a * (0.5 * t * t)).unwrap()
+    }
+
+    /// Random states over the workspace: (position, velocity, acceleration).
+    fn random_states(n: usize) -> Vec<(Vec3, Vec3, Vec3)> {
+        let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+        let all = workspace_points().count();
+        workspace_points()
+            .step_by((all / n).max(1))
+            .map(|p| {
+                let mut r3 =
+                    |s: f64| Vec3::new(rng.range(-s, s), rng.range(-s, s), rng.range(-s, s));
+                (p, r3(300.0), r3(20000.0))
+            })
+            .collect()
+    }
+
+    #[test]
+    #[allow(clippy::needless_range_loop)] // i, k index Γ, the rows and the coordinates
+    fn jacobians_are_half_the_gradients_of_the_closure_equations() {
+        // Γ_i = l_i² − |P − A_i|² differentiated by central differences.
+        let m = kossel();
+        let gamma = |p: [f64; 3], q: [f64; 3], i: usize| {
+            let t = m.towers_mm[i];
+            m.arm2_mm2[i] - (p[0] - t[0]).powi(2) - (p[1] - t[1]).powi(2) - (p[2] - q[i]).powi(2)
+        };
+        let h = 1e-4;
+        for pos in workspace_points().step_by(7) {
+            let q = m.inverse(pos).unwrap();
+            let p = m.platform_mm(pos);
+            let rows = m.jx_rows(p, q);
+            for i in 0..3 {
+                for k in 0..3 {
+                    let (mut pp, mut pm) = (p, p);
+                    pp[k] += h;
+                    pm[k] -= h;
+                    let jx = 0.5 * (gamma(pp, q, i) - gamma(pm, q, i)) / (2.0 * h);
+                    assert!(
+                        (jx - rows[i][k]).abs() < 1e-6,
+                        "Jx[{i}][{k}] {jx} vs {}",
+                        rows[i][k]
+                    );
+                    let (mut qp, mut qm) = (q, q);
+                    qp[k] += h;
+                    qm[k] -= h;
+                    let jq = -0.5 * (gamma(p, qp, i) - gamma(p, qm, i)) / (2.0 * h);
+                    let expected = if i == k { rows[i][2] } else { 0.0 };
+                    assert!(
+                        (jq - expected).abs() < 1e-6,
+                        "Jq[{i}][{k}] {jq} vs {expected}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn eq7_and_eq8_match_finite_differences_of_the_inverse_kinematics() {
+        let m = kossel();
+        let h = 1e-4;
+        for (p, v, a) in random_states(400) {
+            let s = m.evaluate(p, v, a).unwrap();
+            let (qp, q0, qm) = (
+                q_at(&m, p, v, a, h),
+                q_at(&m, p, v, a, 0.0),
+                q_at(&m, p, v, a, -h),
+            );
+            for i in 0..3 {
+                let dq = (qp[i] - qm[i]) / (2.0 * h);
+                let ddq = (qp[i] - 2.0 * q0[i] + qm[i]) / (h * h);
+                assert!(
+                    (dq - s.dq_mm_s[i]).abs() < 1e-4 * (1.0 + dq.abs()),
+                    "dq {dq} vs {}",
+                    s.dq_mm_s[i]
+                );
+                // Truncation h²/12·q'''' grows with the acceleration scale.
+                let tol = 1e-4 * ddq.abs() + 1e-6 * (a.norm() + v.norm_squared());
+                assert!(
+                    (ddq - s.ddq_mm_s2[i]).abs() < tol,
+                    "ddq {ddq} vs {}",
+                    s.ddq_mm_s2[i]
+                );
+                // eq. 3: Jx ṗ = Jq q̇ with the differenced q̇.
+                let rows = m.jx_rows(m.platform_mm(p), s.q_mm);
+                let lhs = dot(rows[i], [v.x, v.y, v.z]);
+                let tol = 1e-6 * 215.0 * (v.norm() + dq.abs()) + 1e-9;
+                assert!(
+                    (lhs - rows[i][2] * dq).abs() < tol,
+                    "{lhs} vs {}",
+                    rows[i][2] * dq
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn forces_match_a_direct_solve_of_the_lagrange_equations() {
+        // eq. 9-11 built independently: generalised coordinates (q1, q2, q3, x, y, z) in m,
+        // M = diag(m_c, m_c, m_c, m_p, m_p, m_p), gravity F = ∂U/∂q, constraint gradients
+        // ∂Γ_i/∂q by finite differences, accelerations of q by differencing eq. 6.
+        let m = kossel();
+        let (mc, mp, g) = (0.25 + 0.02, 0.5 + 0.06, 9.81);
+        let h = 1e-4;
+        for (p, v, a) in random_states(300) {
+            let s = m.evaluate(p, v, a).unwrap();
+            let (qp, q0, qm) = (
+                q_at(&m, p, v, a, h),
+                q_at(&m, p, v, a, 0.0),
+                q_at(&m, p, v, a, -h),
+            );
+            let ddq = [0, 1, 2].map(|i| (qp[i] - 2.0 * q0[i] + qm[i]) / (h * h) * 1e-3);
+            let pc = m.platform_mm(p).map(|x| x * 1e-3);
+            let qs = q0.map(|x| x * 1e-3);
+            let coords = Vector6::new(qs[0], qs[1], qs[2], pc[0], pc[1], pc[2]);
+            let gamma = |c: &Vector6<f64>, i: usize| {
+                let t = m.towers_mm[i];
+                (m.arm_mm[i] * 1e-3).powi(2)
+                    - (c[3] - t[0] * 1e-3).powi(2)
+                    - (c[4] - t[1] * 1e-3).powi(2)
+                    - (c[5] - c[i]).powi(2)
+            };
+            let mut lhs = Matrix6::zeros();
+            let eps = 1e-7;
+            for j in 0..6 {
+                for i in 0..3 {
+                    let (mut cp, mut cm) = (coords, coords);
+                    cp[j] += eps;
+                    cm[j] -= eps;
+                    lhs[(j, i)] = (gamma(&cp, i) - gamma(&cm, i)) / (2.0 * eps);
+                }
+                if j < 3 {
+                    lhs[(j, 3 + j)] = 1.0;
+                }
+            }
+            let mass = Vector6::new(mc, mc, mc, mp, mp, mp);
+            let acc = Vector6::new(ddq[0], ddq[1], ddq[2], a.x * 1e-3, a.y * 1e-3, a.z * 1e-3);
+            let gravity = Vector6::new(mc * g, mc * g, mc * g, 0.0, 0.0, mp * g);
+            let rhs = mass.component_mul(&acc) + gravity;
+            let x = lhs.lu().solve(&rhs).unwrap();
+            for i in 0..3 {
+                let (lam, q) = (x[i], x[3 + i]);
+                assert!(
+                    (q - s.force_n[i]).abs() < 1e-5 * (1.0 + q.abs()),
+                    "Q{i} {q} vs {}",
+                    s.force_n[i]
+                );
+                assert!(
+                    (lam - s.lambda[i]).abs() < 1e-5 * (1.0 + lam.abs()),
+                    "λ{i} {lam} vs {}",
+                    s.lambda[i]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn eq16_static_forces_at_the_centre() {
+        let m = paper_equal_arms();
+        let expected = 9.81 * (2.0 * 0.02 + 0.25 + 0.5 / 3.0);
+        for z in [0.0, 100.0, 250.0] {
+            let f = m.static_forces_n(Vec3::new(0.0, 0.0, z)).unwrap();
+            for fi in f {
+                assert!((fi - expected).abs() < 1e-12, "{fi} vs {expected}");
+            }
+        }
+    }
+
+    #[test]
+    fn eq17_static_forces_sum_to_the_suspended_weight() {
+        for m in [kossel(), paper_equal_arms()] {
+            assert!((m.suspended_weight_n() - 13.4397).abs() < 1e-9);
+            for p in workspace_points() {
+                let f = m.static_forces_n(p).unwrap();
+                assert!(
+                    (f.iter().sum::<f64>() - 13.4397).abs() < 1e-9,
+                    "{f:?} at {p:?}"
+                );
+            }
+        }
+        // Off centre the forces differ (the test above is not trivially symmetric).
+        let f = paper_equal_arms()
+            .static_forces_n(Vec3::new(60.0, 0.0, 0.0))
+            .unwrap();
+        assert!((f[0] - f[1]).abs() > 0.1);
+    }
+
+    /// A smooth random trajectory: per axis a sum of two sines around a centre.
+    struct Trajectory {
+        centre: Vec3,
+        amp: [[f64; 2]; 3],
+        omega: [[f64; 2]; 3],
+        phase: [[f64; 2]; 3],
+    }
+
+    impl Trajectory {
+        fn random(rng: &mut Rng) -> Self {
+            let mut pick =
+                |lo: f64, hi: f64| [(); 3].map(|()| [rng.range(lo, hi), rng.range(lo, hi)]);
+            let amp = pick(5.0, 25.0);
+            let omega = pick(2.0, 40.0);
+            let phase = pick(0.0, 6.3);
+            let centre = Vec3::new(
+                rng.range(-30.0, 30.0),
+                rng.range(-30.0, 30.0),
+                rng.range(60.0, 150.0),
+            );
+            Trajectory {
+                centre,
+                amp,
+                omega,
+                phase,
+            }
+        }
+        /// Position, velocity, acceleration at t.
+        fn at(&self, t: f64) -> (Vec3, Vec3, Vec3) {
+            let (mut p, mut v, mut a) = (self.centre, Vec3::zeros(), Vec3::zeros());
+            for k in 0..3 {
+                for j in 0..2 {
+                    let (amp, w, f) = (self.amp[k][j], self.omega[k][j], self.phase[k][j]);
+                    let (s, c) = (w * t + f).sin_cos();
+                    p[k] += amp * s;
+                    v[k] += amp * w * c;
+                    a[k] -= amp * w * w * s;
+                }
+            }
+            (p, v, a)
+        }
+    }
+
+    #[test]
+    fn eq20_energy_rate_equals_actuator_power_along_random_trajectories() {
+        let m = kossel();
+        let mut rng = Rng(42);
+        for _ in 0..20 {
+            let traj = Trajectory::random(&mut rng);
+            let energy = |t: f64| {
+                let (p, v, a) = traj.at(t);
+                let s = m.evaluate(p, v, a).unwrap();
+                s.kinetic_j + s.potential_j
+            };
+            for k in 0..200 {
+                let t = k as f64 * 0.005;
+                let (p, v, a) = traj.at(t);
+                let s = m.evaluate(p, v, a).unwrap();
+                let scale = s.power_w.abs().max(s.energy_rate_w.abs()).max(1e-3);
+                assert!((s.power_w - s.energy_rate_w).abs() < 1e-6 * scale, "{s:?}");
+                // And the energy itself, differenced in time: an independent check of the
+                // velocities and accelerations that power_w is built from.
+                let h = 2e-6;
+                let de = (energy(t + h) - energy(t - h)) / (2.0 * h);
+                let tol = 1e-6 * (s.power_w.abs() + 1.0);
+                assert!((de - s.power_w).abs() < tol, "{de} vs {}", s.power_w);
+            }
+        }
+    }
+
+    #[test]
+    fn condition_number_brackets_the_two_norm_one() {
+        let m = kossel();
+        for p in workspace_points() {
+            let s = m.evaluate(p, Vec3::zeros(), Vec3::zeros()).unwrap();
+            let rows = m.jx_rows(m.platform_mm(p), s.q_mm);
+            let jx = Matrix3::from_fn(|i, k| rows[i][k]);
+            let sv = jx.singular_values();
+            let k2 = sv.max() / sv.min();
+            assert!(
+                s.jx_condition >= k2 * (1.0 - 1e-12) && s.jx_condition <= 3.0 * k2,
+                "{} vs {k2}",
+                s.jx_condition
+            );
+        }
+    }
+
+    #[test]
+    fn no_nan_for_non_finite_input() {
+        let m = kossel();
+        let bad = Vec3::new(f64::NAN, 0.0, 0.0);
+        assert!(m.evaluate(Vec3::zeros(), bad, Vec3::zeros()).is_err());
+        assert!(m.evaluate(Vec3::zeros(), Vec3::zeros(), bad).is_err());
+    }
+
+    /// `cargo test --release -- --ignored evaluate_speed --nocapture`
+    #[test]
+    #[ignore]
+    fn evaluate_speed() {
+        let m = kossel();
+        let states = random_states(1000);
+        let rounds = 10_000;
+        // CPU time of this thread (ns), so a loaded machine does not inflate the figure.
+        let cpu_ns = || {
+            std::fs::read_to_string("/proc/thread-self/schedstat")
+                .ok()
+                .and_then(|s| s.split_whitespace().next()?.parse::<f64>().ok())
+        };
+        let cpu0 = cpu_ns();
+        let start = std::time::Instant::now();
+        let mut acc = 0.0;
+        for _ in 0..rounds {
+            for &(p, v, a) in &states {
+                let s = m.evaluate(std::hint::black_box(p), v, a);
+                acc += s.map_or(0.0, |s| s.force_n[0]);
+            }
+        }
+        let calls = (rounds * states.len()) as f64;
+        let ns = start.elapsed().as_nanos() as f64 / calls;
+        let cpu = cpu0.zip(cpu_ns()).map(|(a, b)| (b - a) / calls);
+        println!("evaluate: {ns:.1} ns per call wall, {cpu:.1?} ns CPU ({acc})");
+        let cpu0 = cpu_ns();
+        for _ in 0..rounds {
+            for &(p, _, _) in &states {
+                acc += m.inverse(std::hint::black_box(p)).map_or(0.0, |q| q[0]);
+            }
+        }
+        let cpu = cpu0.zip(cpu_ns()).map(|(a, b)| (b - a) / calls);
+        println!("inverse: {cpu:.1?} ns CPU ({acc})");
+    }
+}
