@@ -573,7 +573,7 @@ fn extended<'a>(p: &mut ParsedLine<'a>, line: &'a [u8], rest: &'a [u8]) {
 /// Parses an extended parameter's value as a number (`None` if it is not one).
 pub fn param_f64(value: &[u8]) -> Option<f64> {
     match number_text(value) {
-        Ok((rest, t)) if rest.is_empty() => to_f64(t),
+        Ok((b"", t)) => to_f64(t),
         _ => None,
     }
 }
