@@ -149,6 +149,7 @@ impl Interpreter {
         d: &mut Diags<impl FnMut(Diagnostic)>,
     ) {
         if truncated {
+            self.stats.truncated_lines += 1;
             d.warn(
                 BUFFER_BYTES as u32 + 1,
                 format!(

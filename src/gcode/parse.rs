@@ -8,7 +8,7 @@
 //!          | name                   (two or more of A-Z 0-9 _ starting with two letters
 //!                                    or an underscore: SET_VELOCITY_LIMIT, extended)
 //! classic  = { ws word | ws "(" text ")" }     word = letter [ ws number ]
-//! extended = { ws KEY "=" ( VALUE | '"' text '"' ) }
+//! extended = { ws KEY "=" ( VALUE | '"' text '"' | "'" text "'" ) }
 //! number   = [ "+" | "-" ] digits [ "." digits ] | [ "+" | "-" ] "." digits
 //! ```
 //! `M117`/`M118` (and Marlin's file-name commands M23, M28, M30, M32, M928) take the rest
@@ -87,7 +87,7 @@ pub enum DiagKind {
     TooManyWords,
     /// An extended-command argument without `=`.
     ExpectedKeyValue,
-    /// `"` without its closing quote.
+    /// A quote without its closing quote.
     UnclosedQuote,
 }
 
@@ -123,7 +123,7 @@ impl LineDiag {
                 format!("more than {MAX_WORDS} words or parameters; the rest is ignored")
             }
             DiagKind::ExpectedKeyValue => "expected KEY=VALUE; skipped".to_string(),
-            DiagKind::UnclosedQuote => "`\"` without its closing quote".to_string(),
+            DiagKind::UnclosedQuote => "quote without its closing quote".to_string(),
         }
     }
 }
@@ -547,8 +547,8 @@ fn extended<'a>(p: &mut ParsedLine<'a>, line: &'a [u8], rest: &'a [u8]) {
             rest = r;
             continue;
         };
-        let (r, value) = if let Some(q) = r.strip_prefix(b"\"") {
-            match q.iter().position(|&c| c == b'"') {
+        let (r, value) = if let [quote @ (b'"' | b'\''), q @ ..] = r {
+            match q.iter().position(|c| c == quote) {
                 Some(end) => (&q[end + 1..], &q[..end]),
                 None => {
                     p.diag(col(r), Severity::Warning, DiagKind::UnclosedQuote);
@@ -763,6 +763,8 @@ mod tests {
         assert_eq!(param_f64(b"1,2"), None);
         let p = parse_line(b"exclude_object_start NAME=\"my part.stl\"");
         assert_eq!(p.param("NAME").unwrap().value, b"my part.stl");
+        let p = parse_line(b"EXCLUDE_OBJECT_END NAME='plate 1'");
+        assert_eq!(p.param("NAME").unwrap().value, b"plate 1");
         let p = parse_line(b"PRINT_START OOPS EXTRUDER=210");
         assert_eq!(p.diags()[0].kind, DiagKind::ExpectedKeyValue);
         assert_eq!(p.diags()[0].column, 13);
