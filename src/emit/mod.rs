@@ -11,7 +11,7 @@
 //!   the numbering of [`crate::gcode::interpret`]; numbers of dropped or missing lines are
 //!   ignored.
 //! - An input whose last line has no terminator: our lines still follow it, so that line
-//!   gets the file's first terminator (LF when there is none) and the output ends with the
+//!   gets the terminator of the other lines (the first one found; LF when there is none) and the output ends with the
 //!   marker line [`NO_FINAL_NEWLINE`]. Dropping our lines then also drops the terminator
 //!   in front of a marker that ends the file, which gives the input back. Nothing to add:
 //!   nothing changes.
@@ -47,29 +47,28 @@ pub fn emit<R: Read, W: Write>(
     }
     let mut out = io::BufWriter::with_capacity(1 << 16, output);
     let mut chunks = ChunkReader::new(input);
-    // The file's first terminator, for lines that have none of their own.
+    // The first terminator of a kept line followed by another kept line, for lines that
+    // have none of their own (the last line's may be our addition, see NO_FINAL_NEWLINE).
     let mut default_term: Option<&'static [u8]> = None;
     // The last kept line: its number and terminator, not yet written.
     let mut pending: Option<(u64, &'static [u8])> = None;
     let mut dropping = false;
-    // Whether the last line read was our end-of-file marker.
-    let mut marker_last = false;
+    // The terminator of our end-of-file marker, when it is the last line read.
+    let mut marker_last: Option<&'static [u8]> = None;
 
     while let Some(c) = chunks.next_chunk()? {
         if c.first {
             dropping = c.bytes.starts_with(PREFIX);
-            marker_last = false;
-            if !dropping {
+            marker_last = None;
+            if !dropping && let Some((_, term)) = pending {
+                default_term = default_term.or(Some(term));
                 flush_pending(&mut out, &mut pending, annotations)?;
             }
         }
         let term = terminator(c.bytes, c.last);
-        if default_term.is_none() && !term.is_empty() {
-            default_term = Some(term);
-        }
         if dropping {
-            if c.last {
-                marker_last = c.first && strip_term(c.bytes) == NO_FINAL_NEWLINE.as_bytes();
+            if c.last && c.first && strip_term(c.bytes) == NO_FINAL_NEWLINE.as_bytes() {
+                marker_last = Some(term);
             }
             continue;
         }
@@ -80,14 +79,22 @@ pub fn emit<R: Read, W: Write>(
     }
 
     let default_term = default_term.unwrap_or(b"\n");
+    if let (Some((n, term)), Some(added)) = (pending, marker_last)
+        && term.ends_with(added)
+    {
+        // Our marker ends the input: the terminator after the last kept line was ours
+        // (what is left of it, a CR, was the line's own).
+        out.write_all(&term[..term.len() - added.len()])?;
+        pending = Some((n, b""));
+    }
     match pending {
         // The input's last line had a terminator: write it, then our lines after it.
-        Some((n, term)) if !term.is_empty() && !marker_last => {
+        Some((n, term)) if !term.is_empty() => {
             out.write_all(term)?;
             write_lines(&mut out, annotations.get(&n).into_iter().flatten(), term)?;
             write_lines(&mut out, summary.iter(), term)?;
         }
-        // No terminator after the last line (or it was dropped before our marker).
+        // No terminator after the last line.
         Some((n, _)) => {
             let ours = annotations.get(&n).into_iter().flatten().chain(summary);
             if ours.clone().next().is_some() {
@@ -224,6 +231,18 @@ mod tests {
             format!("G28\n; delta-gcode: s\n{NO_FINAL_NEWLINE}\n").as_bytes()
         );
         assert_eq!(stripped(&out), b"G28");
+    }
+
+    #[test]
+    fn last_line_ending_in_a_lone_cr() {
+        for input in [&b"a\rb\r"[..], b"G1\nx\r", b"G1\r\nx\r"] {
+            let out = run(input, &[(1, "; delta-gcode: a")], &["; delta-gcode: s"]);
+            assert_eq!(stripped(&out), input);
+            assert_eq!(
+                run(&out, &[(1, "; delta-gcode: a")], &["; delta-gcode: s"]),
+                out
+            );
+        }
     }
 
     #[test]
