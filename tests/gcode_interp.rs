@@ -1,0 +1,303 @@
+//! The modal interpreter against hand-computed positions, speeds and limits.
+
+use std::f64::consts::{FRAC_PI_2, PI, TAU};
+
+use delta_gcode::gcode::{Diagnostic, Event, LimitChange, Move, Severity, interpret};
+use delta_gcode::path::{Path, Vec3};
+
+const HOME: [f64; 3] = [0.0, 0.0, 290.0];
+
+fn run(src: &str) -> (Vec<Event>, Vec<Diagnostic>) {
+    let mut events = Vec::new();
+    let mut diags = Vec::new();
+    let stats = interpret(
+        src.as_bytes(),
+        Vec3::from(HOME),
+        |e| events.push(e),
+        |d| diags.push(d),
+    )
+    .unwrap();
+    assert_eq!(stats.bytes, src.len() as u64);
+    (events, diags)
+}
+
+fn moves(events: &[Event]) -> Vec<Move> {
+    events
+        .iter()
+        .filter_map(|e| match e {
+            Event::Move(m) => Some(*m),
+            _ => None,
+        })
+        .collect()
+}
+
+fn v(x: f64, y: f64, z: f64) -> Vec3 {
+    Vec3::new(x, y, z)
+}
+
+fn line(m: &Move) -> (Vec3, Vec3) {
+    match m.path {
+        Path::Line { start, end } => (start, end),
+        Path::Arc(_) => panic!("arc at line {}", m.line),
+    }
+}
+
+#[test]
+fn starts_at_home_and_g28_returns_there() {
+    let (ev, d) = run("G1 X10 F600\nG28\nG1 Y5\n");
+    assert!(d.is_empty());
+    let m = moves(&ev);
+    assert_eq!(line(&m[0]), (v(0.0, 0.0, 290.0), v(10.0, 0.0, 290.0)));
+    assert_eq!(m[0].feed_mm_s, 10.0);
+    assert_eq!(
+        ev[1],
+        Event::Stop {
+            line: 2,
+            dwell_s: 0.0
+        }
+    );
+    assert_eq!(line(&m[1]), (v(0.0, 0.0, 290.0), v(0.0, 5.0, 290.0)));
+    assert_eq!(m[1].line, 3);
+}
+
+#[test]
+fn default_feed_is_klippers_25_mm_s_and_m220_scales_it() {
+    let (ev, _) = run("G1 X1\nM220 S50\nG1 X2\nG1 X3 F1200\nM220\nG1 X4\n");
+    let f: Vec<f64> = moves(&ev).iter().map(|m| m.feed_mm_s).collect();
+    assert_eq!(f, vec![25.0, 12.5, 10.0, 20.0]);
+}
+
+#[test]
+fn relative_modes_and_g92() {
+    // M83 relative E under G90; G91 makes E relative too; G92 shifts coordinates.
+    let src = "G28\nG1 X10 Y0 Z1 E1\nG1 E3\nM83\nG1 E0.5\nM82\nG91\nG1 X1 E0.25\nG90\n\
+               G92 X0 E0\nG1 X5 E2\nG92\nG1 Z0\n";
+    let (ev, d) = run(src);
+    assert!(d.is_empty(), "{d:?}");
+    let m = moves(&ev);
+    let e: Vec<f64> = m.iter().map(|m| m.e_mm).collect();
+    assert_eq!(e, vec![1.0, 2.0, 0.5, 0.25, 2.0]);
+    assert_eq!(line(&m[3]), (v(10.0, 0.0, 1.0), v(11.0, 0.0, 1.0)));
+    // After G92 X0 at machine X 11, X5 is machine 16.
+    assert_eq!(line(&m[4]).1, v(16.0, 0.0, 1.0));
+    // G92 alone zeroes every axis at the current place: Z0 is no move, no event.
+    assert_eq!(m.len(), 5);
+    // E-only moves are zero-length lines where the nozzle is.
+    assert_eq!(line(&m[1]), (v(10.0, 0.0, 1.0), v(10.0, 0.0, 1.0)));
+}
+
+#[test]
+fn inches() {
+    let (ev, _) = run("G28\nG20\nG1 X1 E0.1 F10\nG21\nG1 X1\n");
+    let m = moves(&ev);
+    assert!((line(&m[0]).1.x - 25.4).abs() < 1e-12);
+    assert!((m[0].e_mm - 2.54).abs() < 1e-12);
+    assert!((m[0].feed_mm_s - 254.0 / 60.0).abs() < 1e-12);
+    assert_eq!(line(&m[1]).1.x, 1.0);
+}
+
+#[test]
+fn zero_length_moves_without_e_give_nothing() {
+    let (ev, d) = run("G28\nG1 X0 Y0\nG1 F3000\nG0\n");
+    assert!(d.is_empty());
+    assert_eq!(ev.len(), 1);
+}
+
+#[test]
+fn flsun_helix_start() {
+    // The FLSUN Q5 vendor start code: a quarter turn round the bed centre, E 40.
+    let (ev, d) = run("G28\nM83\nG1 X-98 Y0 Z0.2 F4000\nG3 X0 Y-98 I98 Z0.2 E40 F400\n");
+    assert!(d.is_empty());
+    let m = moves(&ev);
+    let Path::Arc(a) = m[1].path else {
+        panic!("not an arc")
+    };
+    assert_eq!(a.center_mm, [0.0, 0.0]);
+    assert_eq!(a.radius_mm, 98.0);
+    assert!((a.sweep_rad - FRAC_PI_2).abs() < 1e-12);
+    assert!((m[1].path.length_mm() - 98.0 * FRAC_PI_2).abs() < 1e-9);
+    assert_eq!((m[1].e_mm, m[1].line), (40.0, 4));
+    assert!((m[1].feed_mm_s - 400.0 / 60.0).abs() < 1e-12);
+}
+
+#[test]
+fn helix_with_z_rise_and_full_circles() {
+    let (ev, d) = run("G28\nG1 X10 Y0 Z0\nG2 I-10 Z2\nG3 X10 Y0 I-10 J0 Z3\nG2 X0 Y10 R-10\n");
+    assert!(d.is_empty(), "{d:?}");
+    let m = moves(&ev);
+    let arcs: Vec<_> = m[1..]
+        .iter()
+        .map(|m| match m.path {
+            Path::Arc(a) => a,
+            Path::Line { .. } => panic!(),
+        })
+        .collect();
+    // Clockwise full circle rising 2 mm: length √((2π·10)² + 2²).
+    assert_eq!(arcs[0].sweep_rad, -TAU);
+    assert_eq!((arcs[0].z_start_mm, arcs[0].z_delta_mm), (0.0, 2.0));
+    assert!((m[1].path.length_mm() - (TAU * 10.0).hypot(2.0)).abs() < 1e-9);
+    assert_eq!(arcs[1].sweep_rad, TAU);
+    // R-10 clockwise from (10,0) to (0,10): the long way, -3π/2 about the origin.
+    assert!((arcs[2].sweep_rad + 1.5 * PI).abs() < 1e-12);
+    assert!(arcs[2].center_mm[0].abs() < 1e-12 && arcs[2].center_mm[1].abs() < 1e-12);
+}
+
+#[test]
+fn arc_problems() {
+    let (ev, d) = run("G28\nG1 X10 Y0\nG3 X0 Y11 I-10\nG2 X1 Y1\nG3 X20 Y0 R1\nG18\nG2 X0 I1\n");
+    // The mismatched arc still runs (as the firmware does), with a warning.
+    assert_eq!(moves(&ev).len(), 2);
+    let sev: Vec<(u64, Severity)> = d.iter().map(|d| (d.line, d.severity)).collect();
+    assert_eq!(
+        sev,
+        vec![
+            (3, Severity::Warning),
+            (4, Severity::Error),
+            (5, Severity::Error),
+            (6, Severity::Warning),
+            (7, Severity::Error)
+        ]
+    );
+    assert!(d[0].message.contains("1.0000 mm off"), "{}", d[0].message);
+}
+
+#[test]
+fn m204_as_klipper_reads_it() {
+    let (ev, d) = run("M204 S1000 P5\nM204 P1500 T3000\nM204 P800\nM204 T900\nM204 S0\n");
+    let acc: Vec<(u64, Option<f64>)> = ev
+        .iter()
+        .map(|e| match e {
+            Event::Limits { line, change } => (*line, change.accel_mm_s2),
+            _ => panic!(),
+        })
+        .collect();
+    assert_eq!(acc, vec![(1, Some(1000.0)), (2, Some(1500.0))]);
+    let sev: Vec<(u64, Severity)> = d.iter().map(|d| (d.line, d.severity)).collect();
+    assert_eq!(
+        sev,
+        vec![
+            (3, Severity::Warning),
+            (4, Severity::Warning),
+            (5, Severity::Error)
+        ]
+    );
+}
+
+#[test]
+fn set_velocity_limit() {
+    let (ev, d) = run(
+        "SET_VELOCITY_LIMIT VELOCITY=250 ACCEL=3000 SQUARE_CORNER_VELOCITY=0 \
+         MINIMUM_CRUISE_RATIO=0.25\nset_velocity_limit accel=500 ACCEL_TO_DECEL=250\n\
+         SET_VELOCITY_LIMIT MINIMUM_CRUISE_RATIO=1 VELOCITY=-1\nSET_VELOCITY_LIMIT\n",
+    );
+    assert_eq!(
+        ev,
+        vec![
+            Event::Limits {
+                line: 1,
+                change: LimitChange {
+                    velocity_mm_s: Some(250.0),
+                    accel_mm_s2: Some(3000.0),
+                    square_corner_velocity_mm_s: Some(0.0),
+                    minimum_cruise_ratio: Some(0.25),
+                }
+            },
+            Event::Limits {
+                line: 2,
+                change: LimitChange {
+                    accel_mm_s2: Some(500.0),
+                    ..LimitChange::default()
+                }
+            }
+        ]
+    );
+    let got: Vec<(u64, u32, Severity)> = d.iter().map(|d| (d.line, d.column, d.severity)).collect();
+    assert_eq!(
+        got,
+        vec![
+            (2, 30, Severity::Warning),
+            (3, 43, Severity::Error),
+            (3, 20, Severity::Error)
+        ]
+    );
+}
+
+#[test]
+fn dwell_and_stops() {
+    let (ev, _) = run("G4 P250\nG4 S2\nG4\nM400\n");
+    let stops: Vec<(u64, f64)> = ev
+        .iter()
+        .map(|e| match e {
+            Event::Stop { line, dwell_s } => (*line, *dwell_s),
+            _ => panic!(),
+        })
+        .collect();
+    assert_eq!(stops, vec![(1, 0.25), (2, 2.0), (3, 0.0), (4, 0.0)]);
+}
+
+#[test]
+fn firmware_retraction() {
+    let (ev, _) = run(
+        "G28\nG10\nG10\nG11\nG11\nSET_RETRACTION RETRACT_LENGTH=0.5 RETRACT_SPEED=30\nG10\nG10 L2 P1 X0\n",
+    );
+    let m = moves(&ev);
+    let e: Vec<(f64, f64)> = m.iter().map(|m| (m.e_mm, m.feed_mm_s)).collect();
+    // Marlin's defaults: 3 mm at 45 mm/s, back at 8 mm/s; a repeated G10/G11 does nothing;
+    // G10 with L/P (coordinate systems) is not a retract.
+    assert_eq!(e, vec![(-3.0, 45.0), (3.0, 8.0), (-0.5, 30.0)]);
+    assert_eq!(line(&m[0]), (v(0.0, 0.0, 290.0), v(0.0, 0.0, 290.0)));
+}
+
+#[test]
+fn bad_feed_keeps_the_previous_one() {
+    let (ev, d) = run("G1 X1 F600\nG1 X2 F0\nG1 X3 F-5\n");
+    let f: Vec<f64> = moves(&ev).iter().map(|m| m.feed_mm_s).collect();
+    assert_eq!(f, vec![10.0, 10.0, 10.0]);
+    let at: Vec<(u64, u32, Severity)> = d.iter().map(|d| (d.line, d.column, d.severity)).collect();
+    assert_eq!(at, vec![(2, 7, Severity::Error), (3, 7, Severity::Error)]);
+}
+
+#[test]
+fn malformed_motion_line_is_an_error_and_skipped() {
+    let (ev, d) = run("G1 X1\nG1 X2.3.4 Y5\nG1 Y1\n");
+    let m = moves(&ev);
+    assert_eq!(m.len(), 2);
+    assert_eq!(line(&m[1]), (v(1.0, 0.0, 290.0), v(1.0, 1.0, 290.0)));
+    assert_eq!(
+        (d[0].line, d[0].column, d[0].severity),
+        (2, 5, Severity::Error)
+    );
+}
+
+#[test]
+fn unknown_commands_are_counted_and_t_is_not_a_move() {
+    let mut n = 0;
+    let stats = interpret(
+        &b"M104 S215 T1\nT0\nPRINT_START BED=60\nM117 G1 X5\nG29.1\n; G1 X9\n"[..],
+        Vec3::from(HOME),
+        |_| n += 1,
+        |_| {},
+    )
+    .unwrap();
+    assert_eq!(n, 0);
+    assert_eq!(stats.unknown_commands, 5);
+    assert_eq!(stats.lines, 6);
+}
+
+#[test]
+fn overlong_line_is_a_warning_and_reading_goes_on() {
+    let mut src = vec![b';'; 300_000];
+    src.extend_from_slice(b"\nG1 X1\n");
+    let mut diags = Vec::new();
+    let mut moves = 0;
+    let stats = interpret(
+        &src[..],
+        Vec3::from(HOME),
+        |_| moves += 1,
+        |d| diags.push(d),
+    )
+    .unwrap();
+    assert_eq!((stats.lines, stats.truncated_lines, moves), (2, 1, 1));
+    assert_eq!(diags[0].line, 1);
+    assert_eq!(diags[0].severity, Severity::Warning);
+}
