@@ -210,6 +210,13 @@ mod tests {
     }
 
     #[test]
+    fn the_model_can_be_shared_between_threads() {
+        fn shared<T: Send + Sync + Clone>() {}
+        shared::<DeltaModel>();
+        shared::<Unreachable>();
+    }
+
+    #[test]
     fn unreachable_points_are_errors_naming_the_tower() {
         let m = kossel();
         // Far beyond tower C's reach, on the far side from C (towards −y).
