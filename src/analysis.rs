@@ -12,7 +12,7 @@ use anyhow::Context;
 use indicatif::ProgressBar;
 use rayon::prelude::*;
 
-use crate::delta::DeltaModel;
+use crate::delta::{DeltaModel, Unreachable};
 use crate::gcode::{self, Diagnostic, Event, ReadStats};
 use crate::machine::Machine;
 use crate::planner::{PlannedMove, Planner};
@@ -22,8 +22,8 @@ use crate::resample::sample_move;
 /// Planned moves handed to the parallel stage at a time.
 const BATCH: usize = 4096;
 
-/// Tolerance on the home height and the print radius, mm: rounding in slicer output.
-const GEOMETRY_TOLERANCE_MM: f64 = 1e-3;
+/// Tolerance on the print radius, mm: rounding in slicer output.
+const RADIUS_TOLERANCE_MM: f64 = 1e-3;
 
 /// What the model found for one planned move.
 pub struct MoveResult {
@@ -76,7 +76,6 @@ pub fn run<R: Read>(
 struct ModelStage<'m> {
     machine: &'m Machine,
     model: DeltaModel,
-    home_q_mm: [f64; 3],
     trace: bool,
     pending: Vec<PlannedMove>,
     /// The last move processed: the previous move of the next batch's first.
@@ -86,11 +85,9 @@ struct ModelStage<'m> {
 impl<'m> ModelStage<'m> {
     fn new(machine: &'m Machine, trace: bool) -> Self {
         let model = DeltaModel::new(machine);
-        let home_q_mm = model.home_carriages_mm();
         ModelStage {
             machine,
             model,
-            home_q_mm,
             trace,
             pending: Vec::new(),
             prev: None,
@@ -137,7 +134,7 @@ impl<'m> ModelStage<'m> {
         let mut trace = String::new();
         let limit_mm = self.machine.geometry.print_radius_mm;
         let radius_mm = mv.path.max_xy2_mm2().sqrt();
-        if radius_mm > limit_mm + GEOMETRY_TOLERANCE_MM {
+        if radius_mm > limit_mm + RADIUS_TOLERANCE_MM {
             stats.flag(Problem::OutsideRadius {
                 radius_mm,
                 limit_mm,
@@ -152,16 +149,6 @@ impl<'m> ModelStage<'m> {
                         st.force_n,
                         (st.energy_rate_w - st.power_w).abs(),
                     );
-                    for tower in 0..3 {
-                        if st.q_mm[tower] > self.home_q_mm[tower] + GEOMETRY_TOLERANCE_MM {
-                            stats.flag(Problem::AboveHome {
-                                t_s: s.t_s,
-                                tower,
-                                q_mm: st.q_mm[tower],
-                                home_mm: self.home_q_mm[tower],
-                            });
-                        }
-                    }
                     if self.trace {
                         let p = &s.pos_mm;
                         let v = &s.vel_mm_s;
@@ -199,6 +186,11 @@ impl<'m> ModelStage<'m> {
                         );
                     }
                 }
+                Err(Unreachable::AboveTop { tower, over_mm }) => stats.flag(Problem::AboveHome {
+                    t_s: s.t_s,
+                    tower,
+                    over_mm,
+                }),
                 Err(e) => stats.flag(Problem::Unreachable {
                     t_s: s.t_s,
                     tower: e.tower(),

@@ -63,7 +63,7 @@ fn json_report_follows_the_design_schema() {
     ]);
     assert_eq!(o.status.code(), Some(1));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("JSON");
-    assert_eq!(v["machine"].as_str().is_some(), true);
+    assert!(v["machine"].as_str().is_some());
     assert!(v["limit_force_n"].as_f64().is_some());
     let s = &v["summary"];
     for key in ["lines", "moves", "samples", "violations", "unreachable"] {

@@ -18,7 +18,7 @@ fn escape_property(s: &str) -> String {
     escape_data(s).replace(':', "%3A").replace(',', "%2C")
 }
 
-pub fn write_github(out: &mut impl Write, report: &Report) -> io::Result<()> {
+pub fn write_github(out: &mut (impl Write + ?Sized), report: &Report) -> io::Result<()> {
     let file = escape_property(&report.file);
     for v in &report.violations {
         writeln!(

@@ -137,26 +137,25 @@ impl Report {
                 },
             ) => (
                 p.kind(),
-                *tower,
+                tower.unwrap_or(worst),
                 *t_s,
                 format!(
-                    "UNREACHABLE tower {}: {reason} at X{:.3} Y{:.3} Z{:.3}",
-                    TOWERS[*tower], pos_mm[0], pos_mm[1], pos_mm[2]
+                    "UNREACHABLE at X{:.3} Y{:.3} Z{:.3}: {reason}",
+                    pos_mm[0], pos_mm[1], pos_mm[2]
                 ),
             ),
             Some(
                 p @ Problem::AboveHome {
                     t_s,
                     tower,
-                    q_mm,
-                    home_mm,
+                    over_mm,
                 },
             ) => (
                 p.kind(),
                 *tower,
                 *t_s,
                 format!(
-                    "ABOVE HOME tower {}: carriage at {q_mm:.3} mm > home {home_mm:.3} mm",
+                    "ABOVE HOME tower {}: carriage {over_mm:.3} mm above its homed height",
                     TOWERS[*tower]
                 ),
             ),
@@ -250,7 +249,10 @@ pub fn format_forces(f: &[f64; 3]) -> String {
 }
 
 /// Several files' reports as JSON: one object for one file, an array for several.
-pub fn write_json(out: &mut impl std::io::Write, reports: &[Report]) -> std::io::Result<()> {
+pub fn write_json(
+    out: &mut (impl std::io::Write + ?Sized),
+    reports: &[Report],
+) -> std::io::Result<()> {
     match reports {
         [one] => serde_json::to_writer_pretty(&mut *out, one)?,
         many => serde_json::to_writer_pretty(&mut *out, many)?,
@@ -273,9 +275,9 @@ pub(crate) mod tests {
         far.add(3.0, Phase::Accel, [1.0, 1.0, 1.0], 0.0);
         far.flag(Problem::Unreachable {
             t_s: 3.0,
-            tower: 1,
+            tower: Some(1),
             pos_mm: [200.0, 0.0, 0.0],
-            reason: "arm too short".into(),
+            reason: "tower B: arm too short".into(),
         });
         for m in [&ok, &over, &far] {
             r.add_move(m);

@@ -10,18 +10,18 @@ use crate::resample::Phase;
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Problem {
     /// The pose is out of the arms' reach (eq. 6 has no real root).
+    /// `tower` is the tower at fault, when there is one (not for a singular Jx).
     Unreachable {
         t_s: f64,
-        tower: usize,
+        tower: Option<usize>,
         pos_mm: [f64; 3],
         reason: String,
     },
-    /// A carriage would rise above its homed height.
+    /// A carriage would rise above its homed height (the top of its travel).
     AboveHome {
         t_s: f64,
         tower: usize,
-        q_mm: f64,
-        home_mm: f64,
+        over_mm: f64,
     },
     /// The nozzle leaves the print disc.
     OutsideRadius { radius_mm: f64, limit_mm: f64 },
@@ -133,8 +133,7 @@ mod tests {
         s.flag(Problem::AboveHome {
             t_s: 0.0,
             tower: 0,
-            q_mm: 1.0,
-            home_mm: 0.0,
+            over_mm: 1.0,
         });
         assert_eq!(
             s.problem.as_ref().map(Problem::kind),

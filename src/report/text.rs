@@ -13,7 +13,7 @@ fn clock(t_s: f64) -> String {
     format!("{}:{:02}:{:02}", t / 3600, t / 60 % 60, t % 60)
 }
 
-pub fn write_text(out: &mut impl Write, report: &Report) -> io::Result<()> {
+pub fn write_text(out: &mut (impl Write + ?Sized), report: &Report) -> io::Result<()> {
     let s = &report.summary;
     let limit = report.limit_force_n;
     if report.failed() {
@@ -34,8 +34,8 @@ pub fn write_text(out: &mut impl Write, report: &Report) -> io::Result<()> {
         writeln!(out)?;
         writeln!(
             out,
-            "  {:>8}  {:<15}  {:>9}  {:<6}  {:>10}  {}",
-            "line", "force A/B/C (N)", "margin", "phase", "t (s)", "problem / command"
+            "  {:>8}  {:<15}  {:>9}  {:<6}  {:>10}  problem / command",
+            "line", "force A/B/C (N)", "margin", "phase", "t (s)"
         )?;
         for v in worst.iter().take(WORST_SHOWN) {
             let phase = serde_json::to_value(v.phase)
