@@ -1,5 +1,6 @@
-//! The per-line parser, written with nom; numbers with fast-float2. It borrows the line and
-//! allocates nothing: words, parameters and diagnostics live in fixed arrays.
+//! The per-line parser, written with nom; numbers by an exact fast path with fast-float2
+//! behind it (see `number`). It borrows the line and allocates nothing: words and
+//! diagnostics live in fixed arrays, extended parameters are read on demand.
 //!
 //! Grammar of one line (case-insensitive letters; columns are 1-based byte offsets):
 //! ```text
