@@ -62,6 +62,17 @@ fn corpus_reads_without_errors() {
             "{f}: {stats:?}\n  {:.1} MB/s; warnings by kind (count, first line): {warnings:?}",
             stats.bytes as f64 / dt / 1e6
         );
+        // Throughput of `interpret` alone: the file in memory, events only counted.
+        let data = std::fs::read(f).unwrap();
+        let t0 = Instant::now();
+        let mut n = 0u64;
+        interpret(&data[..], Vec3::new(0.0, 0.0, 290.0), |_| n += 1, |_| {}).unwrap();
+        let dt = t0.elapsed().as_secs_f64();
+        eprintln!(
+            "  interpret from memory: {n} events, {:.3} s, {:.1} MB/s",
+            dt,
+            data.len() as f64 / dt / 1e6
+        );
         assert!(errors.is_empty(), "{f}: {errors:#?}");
         assert_eq!(bad_numbers, 0);
         assert!(stats.moves > 1000);

@@ -301,3 +301,28 @@ fn overlong_line_is_a_warning_and_reading_goes_on() {
     assert_eq!(diags[0].line, 1);
     assert_eq!(diags[0].severity, Severity::Warning);
 }
+
+#[test]
+fn crlf_comments_and_missing_final_newline_give_the_same_events() {
+    let lf = "G28\nG1 X1 Y2 E0.5 F1200 ; caf\u{e9}\nG2 X3 Y2 I1\nG1 Z5\n";
+    let (want, d) = run(lf);
+    assert!(d.is_empty());
+    let crlf = lf.replace('\n', "\r\n");
+    assert_eq!(run(&crlf).0, want);
+    assert_eq!(run(lf.trim_end()).0, want);
+    // Non-UTF-8 bytes in a comment.
+    let mut raw = lf.as_bytes().to_vec();
+    let at = raw.windows(3).position(|w| w == b"caf").unwrap() + 3;
+    raw.splice(at..at, [0xff, 0xfe]);
+    let mut ev = Vec::new();
+    let mut diags = Vec::new();
+    interpret(
+        &raw[..],
+        Vec3::from(HOME),
+        |e| ev.push(e),
+        |x| diags.push(x),
+    )
+    .unwrap();
+    assert!(std::str::from_utf8(&raw).is_err());
+    assert_eq!((ev, diags.len()), (want, 0));
+}

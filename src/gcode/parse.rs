@@ -1,5 +1,6 @@
-//! The per-line parser, written with nom; numbers with fast-float2. It borrows the line and
-//! allocates nothing: words, parameters and diagnostics live in fixed arrays.
+//! The per-line parser, written with nom; numbers by an exact fast path with fast-float2
+//! behind it (see `number`). It borrows the line and allocates nothing: words and
+//! diagnostics live in fixed arrays, extended parameters are read on demand.
 //!
 //! Grammar of one line (case-insensitive letters; columns are 1-based byte offsets):
 //! ```text
@@ -16,18 +17,14 @@
 //! the command part: the checksum, XOR of every byte before the `*`.
 
 use nom::{
-    IResult, Parser,
+    IResult,
     bytes::complete::{take_while, take_while1},
-    character::complete::{char, digit0, one_of},
-    combinator::{opt, recognize},
 };
 
 use super::Severity;
 
 /// Most words kept per classic line; more is a warning.
 pub const MAX_WORDS: usize = 16;
-/// Most KEY=VALUE parameters kept per extended line; more is a warning.
-pub const MAX_PARAMS: usize = 16;
 /// Most diagnostics kept per line.
 pub const MAX_DIAGS: usize = 4;
 /// Largest magnitude accepted for a number; larger is a malformed number.
@@ -83,7 +80,7 @@ pub enum DiagKind {
     UnclosedParen,
     /// A letter given twice; the last one is used.
     DuplicateWord(u8),
-    /// More than [`MAX_WORDS`] words or [`MAX_PARAMS`] parameters.
+    /// More than [`MAX_WORDS`] words.
     TooManyWords,
     /// An extended-command argument without `=`.
     ExpectedKeyValue,
@@ -120,7 +117,7 @@ impl LineDiag {
                 format!("{} given twice; the last one is used", char::from(c))
             }
             DiagKind::TooManyWords => {
-                format!("more than {MAX_WORDS} words or parameters; the rest is ignored")
+                format!("more than {MAX_WORDS} words; the rest is ignored")
             }
             DiagKind::ExpectedKeyValue => "expected KEY=VALUE; skipped".to_string(),
             DiagKind::UnclosedQuote => "quote without its closing quote".to_string(),
@@ -163,11 +160,6 @@ const NO_WORD: Word = Word {
     value: None,
     column: 0,
 };
-const NO_PARAM: Param<'static> = Param {
-    key: b"",
-    value: b"",
-    column: 0,
-};
 const NO_DIAG: LineDiag = LineDiag {
     column: 0,
     severity: Severity::Warning,
@@ -181,7 +173,9 @@ pub struct ParsedLine<'a> {
     /// `N` line number, if given.
     pub line_number: Option<u64>,
     words: Fixed<Word, MAX_WORDS>,
-    params: Fixed<Param<'a>, MAX_PARAMS>,
+    /// The whole line (for columns) and an extended command's arguments.
+    line: &'a [u8],
+    args: &'a [u8],
     /// Free text of M117/M118 and the file-name commands.
     pub text: Option<&'a [u8]>,
     /// The `;` comment after the `;`, or else the first `( )` comment's inside.
@@ -196,8 +190,12 @@ impl<'a> ParsedLine<'a> {
         self.words.as_slice()
     }
 
-    pub fn params(&self) -> &[Param<'a>] {
-        self.params.as_slice()
+    /// An extended command's parameters, in order (read on demand: they are rare).
+    pub fn params(&self) -> Params<'a> {
+        Params {
+            line: self.line,
+            rest: self.args,
+        }
     }
 
     pub fn diags(&self) -> &[LineDiag] {
@@ -215,11 +213,10 @@ impl<'a> ParsedLine<'a> {
     }
 
     /// The last parameter with this key (case-insensitive).
-    pub fn param(&self, key: &str) -> Option<&Param<'a>> {
+    pub fn param(&self, key: &str) -> Option<Param<'a>> {
         self.params()
-            .iter()
-            .rev()
-            .find(|p| p.key.eq_ignore_ascii_case(key.as_bytes()))
+            .filter(|p| p.key.eq_ignore_ascii_case(key.as_bytes()))
+            .last()
     }
 
     /// Whether the command is `letter number` (e.g. `is(b'G', 1)`), without a subcode.
@@ -260,11 +257,6 @@ fn spaces(i: &[u8]) -> Res<'_, &[u8]> {
     take_while(is_space)(i)
 }
 
-/// Sign, digits, optional decimal point and digits (possibly empty: checked by the caller).
-fn number_text(i: &[u8]) -> Res<'_, &[u8]> {
-    recognize((opt(one_of("+-")), digit0, opt((char('.'), digit0)))).parse(i)
-}
-
 fn name(i: &[u8]) -> Res<'_, &[u8]> {
     take_while1(|c: u8| c.is_ascii_alphanumeric() || c == b'_')(i)
 }
@@ -278,13 +270,60 @@ fn bare_value(i: &[u8]) -> Res<'_, &[u8]> {
     take_while(|c: u8| !is_space(c) && c != b';')(i)
 }
 
-/// Parses a number's text; `None` when it has no digit or is out of range.
-fn to_f64(t: &[u8]) -> Option<f64> {
-    if !t.iter().any(u8::is_ascii_digit) {
-        return None;
+/// Powers of ten exactly representable in an f64.
+const POW10: [f64; 23] = [
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+    1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+];
+
+/// A number: `[+-] digits [. digits]` (at least one digit), recognised and read in one
+/// pass (nom's parser shape: rest of the input, then the value). The value is `None`
+/// without a digit or beyond [`MAX_NUMBER`].
+///
+/// Up to 15 digits the mantissa and the power of ten are exact in an f64, so one division
+/// gives the correctly rounded value (Clinger's fast path, the one fast-float2 takes
+/// first too, without its general set-up); longer numbers go to fast-float2.
+fn number(i: &[u8]) -> (&[u8], Option<f64>) {
+    let (neg, mut k) = match i.first() {
+        Some(b'-') => (true, 1),
+        Some(b'+') => (false, 1),
+        _ => (false, 0),
+    };
+    let mut m: u64 = 0;
+    let mut digits = 0usize;
+    while let Some(&c) = i.get(k)
+        && c.is_ascii_digit()
+    {
+        m = m.wrapping_mul(10).wrapping_add(u64::from(c - b'0'));
+        digits += 1;
+        k += 1;
     }
-    let v: f64 = fast_float2::parse(t).ok()?;
-    (v.abs() <= MAX_NUMBER).then_some(v)
+    let mut frac = 0usize;
+    if i.get(k) == Some(&b'.') {
+        k += 1;
+        while let Some(&c) = i.get(k)
+            && c.is_ascii_digit()
+        {
+            m = m.wrapping_mul(10).wrapping_add(u64::from(c - b'0'));
+            digits += 1;
+            frac += 1;
+            k += 1;
+        }
+    }
+    let (text, rest) = i.split_at(k);
+    if digits == 0 {
+        return (rest, None);
+    }
+    let v = if digits <= 15 {
+        let v = m as f64 / POW10[frac];
+        if neg { -v } else { v }
+    } else {
+        match fast_float2::parse::<f64, _>(text) {
+            Ok(v) => v,
+            Err(_) => return (rest, None),
+        }
+    };
+    (rest, (v.abs() <= MAX_NUMBER).then_some(v))
 }
 
 /// Commands whose argument is free text.
@@ -319,7 +358,8 @@ pub fn parse_line(line: &[u8]) -> ParsedLine<'_> {
         command: Command::None,
         line_number: None,
         words: Fixed::new(NO_WORD),
-        params: Fixed::new(NO_PARAM),
+        line,
+        args: b"",
         text: None,
         comment: None,
         checksum: None,
@@ -475,11 +515,11 @@ fn classic_words<'a>(p: &mut ParsedLine<'a>, line: &'a [u8], mut rest: &'a [u8])
         after_number = false;
         rest = if matches!(r.first(), Some(b'0'..=b'9' | b'+' | b'-' | b'.')) {
             let value_col = col(r);
-            let (r2, t) = number_text(r).unwrap_or((r, b""));
+            let (r2, num) = number(r);
             // A number ends at whitespace, a letter, `(` or the end.
             let ends_well = matches!(r2.first(), None | Some(b' ' | b'\t' | b'('))
                 || r2.first().is_some_and(u8::is_ascii_alphabetic);
-            match to_f64(t) {
+            match num {
                 Some(v) if ends_well => {
                     value = Some(v);
                     after_number = true;
@@ -520,60 +560,92 @@ fn classic_words<'a>(p: &mut ParsedLine<'a>, line: &'a [u8], mut rest: &'a [u8])
     }
 }
 
-/// A Klipper extended command: name, then `KEY=VALUE` parameters.
+/// A Klipper extended command: name, then `KEY=VALUE` parameters (checked here, stored
+/// as text and read again by [`ParsedLine::params`]).
 fn extended<'a>(p: &mut ParsedLine<'a>, line: &'a [u8], rest: &'a [u8]) {
-    let col = |rest: &[u8]| column(line, rest);
-    let Ok((mut rest, n)) = name(rest) else {
+    let Ok((rest, n)) = name(rest) else {
         return;
     };
     p.command = Command::Extended {
         name: n,
-        column: col(n),
+        column: column(line, n),
     };
-    loop {
-        rest = spaces(rest).map(|(r, _)| r).unwrap_or(rest);
-        if rest.is_empty() {
-            return;
-        }
-        let key_col = col(rest);
-        let Ok((r, k)) = key(rest) else {
-            // Only `=` can start here.
-            p.diag(key_col, Severity::Warning, DiagKind::ExpectedKeyValue);
-            rest = bare_value(rest).map(|(r, _)| r).unwrap_or(&rest[1..]);
-            continue;
-        };
-        let Some(r) = r.strip_prefix(b"=") else {
-            p.diag(key_col, Severity::Warning, DiagKind::ExpectedKeyValue);
-            rest = r;
-            continue;
-        };
-        let (r, value) = if let [quote @ (b'"' | b'\''), q @ ..] = r {
-            match q.iter().position(|c| c == quote) {
-                Some(end) => (&q[end + 1..], &q[..end]),
-                None => {
-                    p.diag(col(r), Severity::Warning, DiagKind::UnclosedQuote);
-                    (&q[q.len()..], q)
-                }
-            }
-        } else {
-            bare_value(r).unwrap_or((r, b""))
-        };
+    p.args = rest;
+    let mut rest = rest;
+    while let Some((r, item)) = next_param(line, rest) {
         rest = r;
-        if !p.params.push(Param {
-            key: k,
-            value,
-            column: key_col,
-        }) {
-            p.diag(key_col, Severity::Warning, DiagKind::TooManyWords);
-            return;
+        if let Err((col, kind)) = item {
+            p.diag(col, Severity::Warning, kind);
         }
     }
 }
 
+/// Iterator over an extended command's parameters; malformed ones are skipped.
+#[derive(Clone, Debug)]
+pub struct Params<'a> {
+    line: &'a [u8],
+    rest: &'a [u8],
+}
+
+impl<'a> Iterator for Params<'a> {
+    type Item = Param<'a>;
+
+    fn next(&mut self) -> Option<Param<'a>> {
+        loop {
+            let (rest, item) = next_param(self.line, self.rest)?;
+            self.rest = rest;
+            if let Ok(p) = item {
+                return Some(p);
+            }
+        }
+    }
+}
+
+type ParamItem<'a> = Result<Param<'a>, (u32, DiagKind)>;
+
+/// The next `KEY=VALUE` of `rest` (a sub-slice of `line`), or the problem at its place;
+/// `None` at the end.
+fn next_param<'a>(line: &'a [u8], rest: &'a [u8]) -> Option<(&'a [u8], ParamItem<'a>)> {
+    let rest = spaces(rest).map(|(r, _)| r).unwrap_or(rest);
+    if rest.is_empty() {
+        return None;
+    }
+    let key_col = column(line, rest);
+    let Ok((r, k)) = key(rest) else {
+        // Only `=` can start here.
+        let r = bare_value(rest).map(|(r, _)| r).unwrap_or(&rest[1..]);
+        return Some((r, Err((key_col, DiagKind::ExpectedKeyValue))));
+    };
+    let Some(r) = r.strip_prefix(b"=") else {
+        return Some((r, Err((key_col, DiagKind::ExpectedKeyValue))));
+    };
+    let (r, value) = if let [quote @ (b'"' | b'\''), q @ ..] = r {
+        match q.iter().position(|c| c == quote) {
+            Some(end) => (&q[end + 1..], &q[..end]),
+            None => {
+                return Some((
+                    &q[q.len()..],
+                    Err((column(line, r), DiagKind::UnclosedQuote)),
+                ));
+            }
+        }
+    } else {
+        bare_value(r).unwrap_or((r, b""))
+    };
+    Some((
+        r,
+        Ok(Param {
+            key: k,
+            value,
+            column: key_col,
+        }),
+    ))
+}
+
 /// Parses an extended parameter's value as a number (`None` if it is not one).
 pub fn param_f64(value: &[u8]) -> Option<f64> {
-    match number_text(value) {
-        Ok((b"", t)) => to_f64(t),
+    match number(value) {
+        (b"", v) => v,
         _ => None,
     }
 }
@@ -751,7 +823,7 @@ mod tests {
         assert!(
             matches!(p.command, Command::Extended { name, .. } if name == b"EXCLUDE_OBJECT_DEFINE")
         );
-        let kv: Vec<(&[u8], &[u8])> = p.params().iter().map(|p| (p.key, p.value)).collect();
+        let kv: Vec<(&[u8], &[u8])> = p.params().map(|p| (p.key, p.value)).collect();
         assert_eq!(
             kv,
             vec![
@@ -819,6 +891,39 @@ mod tests {
         assert_eq!(p.diags()[0].column, 7);
         assert_eq!(p.diags()[1].kind, DiagKind::DuplicateWord(b'X'));
         assert_eq!(p.value(b'X'), Some(3.0));
+    }
+
+    #[test]
+    fn short_decimals_match_fast_float() {
+        // Against fast-float2 (correctly rounded), over many shapes of numbers.
+        let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
+        for _ in 0..200_000 {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            let int = x % 1_000_000;
+            let frac_digits = (x >> 20) % 10;
+            let frac = (x >> 24) % 10u64.pow(frac_digits as u32);
+            let sign = ["", "-", "+"][((x >> 40) % 3) as usize];
+            let t = if frac_digits == 0 {
+                format!("{sign}{int}")
+            } else {
+                format!("{sign}{int}.{frac:0w$}", w = frac_digits as usize)
+            };
+            let want: f64 = fast_float2::parse(t.as_bytes()).unwrap();
+            assert_eq!(number(t.as_bytes()), (&b""[..], Some(want)), "{t}");
+        }
+        assert_eq!(number(b".5 X"), (&b" X"[..], Some(0.5)));
+        assert_eq!(number(b"-.25"), (&b""[..], Some(-0.25)));
+        assert_eq!(number(b"7.Y"), (&b"Y"[..], Some(7.0)));
+        assert_eq!(number(b"-"), (&b""[..], None));
+        assert_eq!(number(b"."), (&b""[..], None));
+        assert_eq!(number(b"1.2.3"), (&b".3"[..], Some(1.2)));
+        assert_eq!(number(b"1234567890123456").1, None); // out of range
+        assert_eq!(
+            number(b"0.1234567890123456789").1,
+            "0.1234567890123456789".parse::<f64>().ok()
+        );
     }
 
     #[test]
