@@ -1,4 +1,4 @@
-; delta-gcode sample: an aggressive tune written to exceed the motor force limit of
+; Sample for delta-gcode: an aggressive tune written to exceed the motor force limit of
 ; machines/kossel.yaml on purpose: 20 m/s^2 accelerations and a square corner velocity of
 ; 40 mm/s, so each 90-degree corner of the zig-zag changes the velocity by ~57 mm/s at once.
 G28 ; home
