@@ -187,7 +187,8 @@ pub fn import_klipper(
             ),
         });
     }
-    let print_radius_mm = print_radius.value.min(reach);
+    // Rounded down to 0.01 mm, so it stays inside Klipper's limit.
+    let print_radius_mm = print_radius.value.min((reach * 100.0).floor() / 100.0);
     let print_radius_src = if print_radius_mm < print_radius.value {
         notes.push(format!(
             "print_radius {} clamped to {} mm, the radius where Klipper's delta stops moves (a carriage 12x faster than the nozzle)",
@@ -936,10 +937,11 @@ mod tests {
     #[test]
     fn kossel_print_radius_defaults_to_klipper_reach() {
         // No print_radius: Klipper's default is delta_radius (134.4), then clamped to where a
-        // carriage moves 12x the nozzle: 12 * 269 / sqrt(145) - 134.4 = 133.6708 (by hand).
+        // carriage moves 12x the nozzle: 12 * 269 / sqrt(145) - 134.4 = 133.6708 (by hand),
+        // rounded down to 0.01 mm.
         let p = import(KOSSEL, "kossel.cfg");
         let v = parse(&p);
-        assert!((f(&v, "geometry.print_radius_mm") - 133.6708).abs() < 1e-3);
+        assert_eq!(f(&v, "geometry.print_radius_mm"), 133.67);
         assert_eq!(f(&v, "geometry.delta_radius_mm"), 134.4);
         assert_eq!(f(&v, "geometry.arm_length_mm"), 269.0);
         assert_eq!(f(&v, "geometry.home_z_mm"), 295.6);
