@@ -10,6 +10,7 @@ pub mod cli;
 pub mod delta;
 pub mod emit;
 pub mod gcode;
+pub mod klipper_import;
 pub mod machine;
 pub mod path;
 pub mod planner;
