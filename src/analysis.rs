@@ -7,6 +7,7 @@ use std::fmt::Write as _;
 use std::fs::File;
 use std::io::{self, BufRead, BufReader, Read};
 use std::path::Path;
+use std::sync::mpsc;
 
 use anyhow::Context;
 use indicatif::ProgressBar;
@@ -41,34 +42,59 @@ pub struct RunTotals {
 /// The columns of the trace CSV (DESIGN.md).
 pub const TRACE_HEADER: &str = "t_s,line,x_mm,y_mm,z_mm,vx_mm_s,vy_mm_s,vz_mm_s,ax_mm_s2,ay_mm_s2,az_mm_s2,q1_mm,q2_mm,q3_mm,dq1_mm_s,dq2_mm_s,dq3_mm_s,ddq1_mm_s2,ddq2_mm_s2,ddq3_mm_s2,f1_n,f2_n,f3_n,power_w,energy_rate_w";
 
+/// Batches in flight between the planner and the model stage: bounds the memory.
+const BATCHES_IN_FLIGHT: usize = 2;
+
 /// Runs the pipeline over `input`. `on_move` gets every planned move's result in file order,
 /// `on_diag` every diagnostic of the reader.
+///
+/// The reader, interpreter and planner run on this thread; the model stage runs on another,
+/// fed batches of planned moves through a bounded channel, and spreads each batch over the
+/// rayon pool. So the sequential stages overlap the parallel one, and memory stays bounded.
 pub fn run<R: Read>(
     input: R,
     machine: &Machine,
     trace: bool,
-    mut on_move: impl FnMut(MoveResult),
+    mut on_move: impl FnMut(MoveResult) + Send,
     on_diag: impl FnMut(Diagnostic),
 ) -> io::Result<RunTotals> {
-    let mut stage = ModelStage::new(machine, trace);
-    let mut planner = Planner::new(machine);
-    let home = nalgebra::Vector3::new(0.0, 0.0, machine.geometry.home_z_mm);
-    let read = gcode::interpret(
-        input,
-        home,
-        |event: Event| {
-            planner.push(event, &mut stage.pending);
-            if stage.pending.len() > BATCH {
+    let (to_model, batches) = mpsc::sync_channel::<Vec<PlannedMove>>(BATCHES_IN_FLIGHT);
+    std::thread::scope(|scope| {
+        let model = scope.spawn(move || {
+            let mut stage = ModelStage::new(machine, trace);
+            for batch in batches {
+                stage.pending.extend(batch);
                 stage.process(false, &mut on_move);
             }
-        },
-        on_diag,
-    )?;
-    planner.finish(&mut stage.pending);
-    stage.process(true, &mut on_move);
-    Ok(RunTotals {
-        read,
-        print_time_s: planner.print_time_s(),
+            stage.process(true, &mut on_move);
+        });
+        let mut planner = Planner::new(machine);
+        let home = nalgebra::Vector3::new(0.0, 0.0, machine.geometry.home_z_mm);
+        let mut planned = Vec::with_capacity(2 * BATCH);
+        // A send fails only when the model stage has stopped, and then its panic is
+        // re-raised by the join below.
+        let read = gcode::interpret(
+            input,
+            home,
+            |event: Event| {
+                planner.push(event, &mut planned);
+                if planned.len() >= BATCH {
+                    let full = std::mem::replace(&mut planned, Vec::with_capacity(2 * BATCH));
+                    let _ = to_model.send(full);
+                }
+            },
+            on_diag,
+        );
+        planner.finish(&mut planned);
+        let _ = to_model.send(planned);
+        drop(to_model);
+        if let Err(panic) = model.join() {
+            std::panic::resume_unwind(panic);
+        }
+        Ok(RunTotals {
+            read: read?,
+            print_time_s: planner.print_time_s(),
+        })
     })
 }
 
@@ -115,7 +141,11 @@ impl<'m> ModelStage<'m> {
                 } else {
                     pending.get(i - 1)
                 };
-                self.evaluate(before, &pending[i], pending.get(i + 1))
+                if self.trace {
+                    self.evaluate::<true>(before, &pending[i], pending.get(i + 1))
+                } else {
+                    self.evaluate::<false>(before, &pending[i], pending.get(i + 1))
+                }
             })
             .collect();
         results.into_iter().for_each(&mut *on_move);
@@ -123,8 +153,9 @@ impl<'m> ModelStage<'m> {
         self.pending.drain(..n);
     }
 
-    /// Resamples one move and runs the delta model on every sample.
-    fn evaluate(
+    /// Resamples one move and runs the delta model on every sample; with `TRACE`, writes the
+    /// trace rows too (a constant, so the check's loop computes nothing it does not use).
+    fn evaluate<const TRACE: bool>(
         &self,
         prev: Option<&PlannedMove>,
         mv: &PlannedMove,
@@ -149,7 +180,7 @@ impl<'m> ModelStage<'m> {
                         st.force_n,
                         (st.energy_rate_w - st.power_w).abs(),
                     );
-                    if self.trace {
+                    if TRACE {
                         let p = &s.pos_mm;
                         let v = &s.vel_mm_s;
                         let a = &s.acc_mm_s2;

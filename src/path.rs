@@ -41,6 +41,7 @@ impl Path {
     }
 
     /// Position at parameter u ∈ [0, 1].
+    #[inline(always)]
     pub fn point(&self, u: f64) -> Vec3 {
         match self {
             Path::Line { start, end } => start + (end - start) * u,
@@ -56,6 +57,7 @@ impl Path {
     }
 
     /// First derivative dp/du.
+    #[inline(always)]
     pub fn d1(&self, u: f64) -> Vec3 {
         match self {
             Path::Line { start, end } => end - start,
@@ -68,6 +70,7 @@ impl Path {
     }
 
     /// Second derivative d²p/du².
+    #[inline(always)]
     pub fn d2(&self, u: f64) -> Vec3 {
         match self {
             Path::Line { .. } => Vec3::zeros(),

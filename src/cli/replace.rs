@@ -12,7 +12,7 @@ use anyhow::Context;
 /// error the temporary file is removed and `target` is left as it was.
 pub fn replace_file(
     target: &Path,
-    write: impl FnOnce(&mut dyn Write) -> io::Result<()>,
+    write: impl FnOnce(&mut (dyn Write + Send)) -> io::Result<()>,
 ) -> anyhow::Result<()> {
     let dir = match target.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,

@@ -1,7 +1,7 @@
 //! `delta-gcode trace FILE --machine M.yaml -o trace.csv`: one CSV row per sample.
 
 use std::fs::File;
-use std::io::{BufReader, Write};
+use std::io::{BufReader, BufWriter, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -25,7 +25,7 @@ pub struct Args {
 
 pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let machine = args.machine.load()?;
-    let write = |w: &mut dyn Write| -> std::io::Result<()> {
+    let write = |w: &mut (dyn Write + Send)| -> std::io::Result<()> {
         let input = BufReader::with_capacity(1 << 16, File::open(&args.file)?);
         writeln!(w, "{TRACE_HEADER}")?;
         let mut failure = Ok(());
@@ -51,7 +51,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         failure
     };
     if args.output.as_os_str() == "-" {
-        let mut out = std::io::stdout().lock();
+        let mut out = BufWriter::with_capacity(1 << 16, std::io::stdout());
         write(&mut out)?;
         out.flush()?;
     } else {

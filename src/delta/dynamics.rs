@@ -37,8 +37,10 @@ pub struct DynState {
 
 impl DeltaModel {
     /// The full model at a nozzle position, velocity and acceleration (mm, mm/s, mm/s²).
+    /// Inlined, so that a caller that reads only the forces pays only for them.
     /// Closed forms throughout: Jq is diagonal, and Jx⁻ᵀ comes from the cross products of
     /// Jx's rows (the arm vectors), so nothing is factorised or allocated.
+    #[inline(always)]
     pub fn evaluate(
         &self,
         pos_mm: Vec3,

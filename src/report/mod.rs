@@ -126,7 +126,6 @@ impl Report {
 
     fn violation_of(&self, m: &MoveStats) -> Option<Violation> {
         let worst = m.worst_tower();
-        let fmt_forces = format_forces(&m.peak_force_n);
         let (kind, tower, t_s, message) = match &m.problem {
             Some(
                 p @ Problem::Unreachable {
@@ -174,7 +173,11 @@ impl Report {
                 "force",
                 worst,
                 m.peak_t_s[worst],
-                format!("OVER force {fmt_forces} N > {:.1} N", self.limit_force_n),
+                format!(
+                    "OVER force {} N > {:.1} N",
+                    format_forces(&m.peak_force_n),
+                    self.limit_force_n
+                ),
             ),
             None => return None,
         };

@@ -14,12 +14,15 @@ pub trait Curve {
 }
 
 impl Curve for Path {
+    #[inline(always)]
     fn point(&self, u: f64) -> Vec3 {
         Path::point(self, u)
     }
+    #[inline(always)]
     fn d1(&self, u: f64) -> Vec3 {
         Path::d1(self, u)
     }
+    #[inline(always)]
     fn d2(&self, u: f64) -> Vec3 {
         Path::d2(self, u)
     }
@@ -33,6 +36,7 @@ impl Curve for Path {
 /// u+ = u + dt·v/|p'| + dt²/2·(a_t/|p'| − v²·(p'·p'')/|p'|⁴).
 /// For a_t = 0 it is eq. 19 itself. It is exact for lines and circular (helical) arcs,
 /// whose |p'| is constant. A point where p' = 0 does not move.
+#[inline(always)]
 pub fn taylor_step<C: Curve + ?Sized>(
     curve: &C,
     u: f64,
@@ -56,6 +60,7 @@ pub fn taylor_step<C: Curve + ?Sized>(
 /// velocity v·T with T = p'/|p'|, acceleration a_t·T + v²/|p'|²·(p'' − (p''·T)·T), the
 /// second term being the centripetal v²·κ along the principal normal. A point where p' = 0
 /// has zero velocity and acceleration.
+#[inline(always)]
 pub fn motion_on<C: Curve + ?Sized>(
     curve: &C,
     u: f64,

@@ -195,7 +195,7 @@ fn sample_span(
             (mv.path.start(), Vec3::zeros(), Vec3::zeros())
         };
         let kick = impulse(t);
-        let phase = if kick.norm() <= CORNER_MIN_MM_S2 {
+        let phase = if kick.norm_squared() <= CORNER_MIN_MM_S2 * CORNER_MIN_MM_S2 {
             law.phase
         } else {
             Phase::Corner
