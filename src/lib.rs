@@ -13,5 +13,6 @@ pub mod gcode;
 pub mod machine;
 pub mod path;
 pub mod planner;
+pub mod plot;
 pub mod report;
 pub mod resample;
