@@ -44,7 +44,12 @@ fn plot_draws_columns_sums_differences_and_reference_lines() {
         .arg(&csv)
         .args(["--label", "first", "--label", "second"])
         .args(["--column", "f1_n", "--sum", "f1_n,f2_n,f3_n"])
-        .args(["--diff", "energy_rate_w,power_w", "--hline", "13.4397"])
+        .args([
+            "--diff",
+            "energy_rate_w,power_w",
+            "--hline",
+            "13.4397:weight (eq. 17)",
+        ])
         .args(["--energy-slope", PAPER, "--lines", "4.."])
         .args(["--title", "Square", "--y-label", "N or W", "-o"])
         .arg(&svg)
@@ -57,7 +62,7 @@ fn plot_draws_columns_sums_differences_and_reference_lines() {
         "second: f1_n + f2_n + f3_n",
         "first: energy_rate_w − power_w",
         "second: d(K+U)/dt, differenced",
-        "13.4397",
+        "weight (eq. 17)",
         "Square",
         "N or W",
     ] {

@@ -31,9 +31,9 @@ pub struct Args {
     /// Legend name of each file, in order (default: the file name)
     #[arg(long = "label", value_name = "TEXT")]
     pub labels: Vec<String>,
-    /// A horizontal reference line (repeatable)
-    #[arg(long = "hline", value_name = "VALUE", allow_negative_numbers = true)]
-    pub hlines: Vec<f64>,
+    /// A horizontal reference line, VALUE or VALUE:LEGEND (repeatable)
+    #[arg(long = "hline", value_name = "VALUE[:LEGEND]", value_parser = parse_hline, allow_hyphen_values = true)]
+    pub hlines: Vec<(f64, String)>,
     /// The x column
     #[arg(long, value_name = "NAME", default_value = "t_s")]
     pub x: String,
@@ -72,6 +72,15 @@ fn parse_lines(s: &str) -> Result<(u64, u64), String> {
         }
     };
     Ok((bound(a, 0)?, bound(b, u64::MAX)?))
+}
+
+/// `VALUE` or `VALUE:LEGEND` (the legend defaults to the value).
+fn parse_hline(s: &str) -> Result<(f64, String), String> {
+    let (value, legend) = s.split_once(':').unwrap_or((s, s));
+    match value.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok((v, legend.to_string())),
+        _ => Err(format!("expected a number, found `{value}`")),
+    }
 }
 
 /// `A..B`, `A..`, `..B` → bounds on x.
@@ -232,9 +241,9 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let hlines: Vec<HLine> = args
         .hlines
         .iter()
-        .map(|&y| HLine {
-            y,
-            name: format!("{y}"),
+        .map(|(y, name)| HLine {
+            y: *y,
+            name: name.clone(),
         })
         .collect();
     let x_desc = if args.normalize_x {
@@ -366,5 +375,8 @@ mod tests {
         assert_eq!(parse_x_range("-1..0.5"), Ok((-1.0, 0.5)));
         assert_eq!(parse_x_range("..2"), Ok((f64::NEG_INFINITY, 2.0)));
         assert!(parse_x_range("1..inf").is_err());
+        assert_eq!(parse_hline("-40"), Ok((-40.0, "-40".into())));
+        assert_eq!(parse_hline("13.4:weight"), Ok((13.4, "weight".into())));
+        assert!(parse_hline("x:y").is_err());
     }
 }

@@ -59,10 +59,33 @@ pub fn line_chart_string(chart: &LineChart) -> anyhow::Result<String> {
         .map(|s| (s.name.as_str(), decimate(&finite(&s.points), BUCKETS)))
         .collect();
     let hlines: Vec<&HLine> = chart.hlines.iter().filter(|h| h.y.is_finite()).collect();
+    // plotters places ticks badly on spans near the f64 resolution (1e-16 W residuals):
+    // such values are drawn scaled by a power of ten, named in the axis description.
+    let biggest = series
+        .iter()
+        .flat_map(|(_, p)| p.iter().map(|p| p.1.abs()))
+        .chain(hlines.iter().map(|h| h.y.abs()))
+        .fold(0.0, f64::max);
+    let exponent = if biggest > 0.0 && !(1e-6..1e9).contains(&biggest) {
+        biggest.log10().floor() as i32
+    } else {
+        0
+    };
+    let y_scale = 10f64.powi(-exponent);
+    let series: Vec<(&str, Vec<(f64, f64)>)> = series
+        .into_iter()
+        .map(|(n, p)| (n, p.into_iter().map(|(x, y)| (x, y * y_scale)).collect()))
+        .collect();
+    let y_desc = if exponent == 0 {
+        chart.y_desc.to_string()
+    } else {
+        format!("{} (×1e{exponent})", chart.y_desc)
+    };
     let xs = series.iter().flat_map(|(_, p)| p.iter().map(|p| p.0));
     let ys = series.iter().flat_map(|(_, p)| p.iter().map(|p| p.1));
     let (x0, x1) = padded_range(xs, 0.0);
-    let (y0, y1) = padded_range(ys.chain(hlines.iter().map(|h| h.y)), 0.05);
+    let hline_ys = hlines.iter().map(|h| h.y * y_scale);
+    let (y0, y1) = padded_range(ys.chain(hline_ys), 0.05);
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, SIZE_PX).into_drawing_area();
@@ -75,7 +98,7 @@ pub fn line_chart_string(chart: &LineChart) -> anyhow::Result<String> {
             .build_cartesian_2d(x0..x1, y0..y1)?;
         ctx.configure_mesh()
             .x_desc(chart.x_desc)
-            .y_desc(chart.y_desc)
+            .y_desc(&y_desc)
             .x_label_formatter(&|v| tick_label(*v, x1 - x0))
             .y_label_formatter(&|v| tick_label(*v, y1 - y0))
             .light_line_style(RGBColor(235, 235, 235))
@@ -261,6 +284,21 @@ mod tests {
         for text in ["alpha", "beta", "ref", "t (s)", ">\nT\n</text>"] {
             assert!(svg.contains(text), "{text}");
         }
+        // Residuals at the f64 resolution are drawn scaled, the scale named on the axis.
+        let tiny = [Series {
+            name: "residual".into(),
+            points: vec![(0.0, 3e-16), (1.0, -5e-16), (2.0, 8e-16)],
+        }];
+        let svg = line_chart_string(&LineChart {
+            title: "",
+            x_desc: "",
+            y_desc: "W",
+            series: &tiny,
+            hlines: &[],
+        })
+        .unwrap();
+        assert_valid_svg(&svg);
+        assert!(svg.contains("W (×1e-16)"));
         // Empty input: an empty frame, still valid.
         let svg = line_chart_string(&LineChart {
             title: "",
