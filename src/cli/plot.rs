@@ -51,6 +51,7 @@ pub struct Args {
     /// independent check of power_w, eq. 20)
     #[arg(long, value_name = "M.yaml")]
     pub energy_slope: Option<PathBuf>,
+    /// The chart's title
     #[arg(long, default_value = "")]
     pub title: String,
     /// The y axis name
@@ -58,20 +59,36 @@ pub struct Args {
     pub y_label: String,
 }
 
-/// `A..B`, `A..`, `..B` → inclusive bounds.
-fn parse_lines(s: &str) -> Result<(u64, u64), String> {
+/// `A..B`, `A..` or `..B` → inclusive bounds, an open end taking its bound from `open`;
+/// each given end must parse and pass `valid`.
+fn parse_range<T: std::str::FromStr + Copy>(
+    s: &str,
+    open: (T, T),
+    valid: impl Fn(&T) -> bool,
+) -> Result<(T, T), String> {
     let (a, b) = s
         .split_once("..")
         .ok_or_else(|| format!("expected A..B, A.. or ..B, found `{s}`"))?;
-    let bound = |t: &str, default: u64| {
+    let bound = |t: &str, default: T| {
         if t.is_empty() {
-            Ok(default)
-        } else {
-            t.parse::<u64>()
-                .map_err(|_| format!("expected a line number, found `{t}`"))
+            return Ok(default);
         }
+        t.parse::<T>()
+            .ok()
+            .filter(&valid)
+            .ok_or_else(|| format!("expected a number, found `{t}`"))
     };
-    Ok((bound(a, 0)?, bound(b, u64::MAX)?))
+    Ok((bound(a, open.0)?, bound(b, open.1)?))
+}
+
+fn parse_lines(s: &str) -> Result<(u64, u64), String> {
+    parse_range(s, (0, u64::MAX), |_| true)
+}
+
+fn parse_x_range(s: &str) -> Result<(f64, f64), String> {
+    parse_range(s, (f64::NEG_INFINITY, f64::INFINITY), |v: &f64| {
+        v.is_finite()
+    })
 }
 
 /// `VALUE` or `VALUE:LEGEND` (the legend defaults to the value).
@@ -81,23 +98,6 @@ fn parse_hline(s: &str) -> Result<(f64, String), String> {
         Ok(v) if v.is_finite() => Ok((v, legend.to_string())),
         _ => Err(format!("expected a number, found `{value}`")),
     }
-}
-
-/// `A..B`, `A..`, `..B` → bounds on x.
-fn parse_x_range(s: &str) -> Result<(f64, f64), String> {
-    let (a, b) = s
-        .split_once("..")
-        .ok_or_else(|| format!("expected A..B, A.. or ..B, found `{s}`"))?;
-    let bound = |t: &str, default: f64| {
-        if t.is_empty() {
-            return Ok(default);
-        }
-        match t.parse::<f64>() {
-            Ok(v) if v.is_finite() => Ok(v),
-            _ => Err(format!("expected a number, found `{t}`")),
-        }
-    };
-    Ok((bound(a, f64::NEG_INFINITY)?, bound(b, f64::INFINITY)?))
 }
 
 /// One curve to draw: its legend name and the columns it adds (+1) or subtracts (−1).

@@ -21,11 +21,12 @@ fn read_columns(
     origin: &str,
     names: &[&str],
 ) -> anyhow::Result<Vec<Vec<f64>>> {
-    let mut lines = input.lines();
-    let header = match lines.next() {
-        Some(h) => h.with_context(|| format!("reading {origin}"))?,
-        None => bail!("{origin}: empty file, expected a trace CSV header"),
-    };
+    let mut input = input;
+    let read_error = || format!("reading {origin}");
+    let mut header = String::new();
+    if input.read_line(&mut header).with_context(read_error)? == 0 {
+        bail!("{origin}: empty file, expected a trace CSV header");
+    }
     let fields: Vec<&str> = header.trim_end().split(',').collect();
     let index: Vec<usize> = names
         .iter()
@@ -39,9 +40,13 @@ fn read_columns(
         })
         .collect::<anyhow::Result<_>>()?;
     let mut out = vec![Vec::new(); names.len()];
-    for (n, line) in lines.enumerate() {
-        let line = line.with_context(|| format!("reading {origin}"))?;
-        let line_no = n + 2;
+    // One buffer for every row: nothing is allocated per line but the values kept.
+    let mut line = String::new();
+    for line_no in 2.. {
+        line.clear();
+        if input.read_line(&mut line).with_context(read_error)? == 0 {
+            break;
+        }
         if line.trim().is_empty() {
             continue;
         }
