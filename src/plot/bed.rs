@@ -17,6 +17,26 @@ const OVER: [(u8, u8, u8); 2] = [(230, 30, 30), (110, 0, 20)];
 const MAP_PX: u32 = 640;
 const BAR_PX: u32 = 150;
 
+/// Above this many points the map keeps the worst point of each of CELLS × CELLS cells.
+const MAX_DOTS: usize = 20_000;
+/// Cells per side: a dot is 6 px wide on a map of about 560 px.
+const CELLS: usize = 100;
+
+/// The worst point (highest use) of each cell of a `cells` × `cells` grid over
+/// [−reach, reach]², so a whole print's moves make a map of bounded size that still shows
+/// every over-limit spot.
+fn worst_per_cell(points: &[(f64, f64, f64)], reach: f64, cells: usize) -> Vec<(f64, f64, f64)> {
+    let cell_of = |v: f64| (((v + reach) / (2.0 * reach) * cells as f64) as usize).min(cells - 1);
+    let mut grid: Vec<Option<(f64, f64, f64)>> = vec![None; cells * cells];
+    for &p in points {
+        let slot = &mut grid[cell_of(p.1) * cells + cell_of(p.0)];
+        if slot.is_none_or(|q| p.2 > q.2) {
+            *slot = Some(p);
+        }
+    }
+    grid.into_iter().flatten().collect()
+}
+
 /// The colour of a use (1 = the limit). Non-finite counts as over.
 fn colour_of(use_: f64) -> RGBColor {
     let lerp = |a: (u8, u8, u8), b: (u8, u8, u8), f: f64| {
@@ -37,8 +57,10 @@ fn colour_of(use_: f64) -> RGBColor {
 }
 
 /// Writes the bed map to `path` as SVG: every point (x_mm, y_mm, use) a dot coloured by its
-/// use of the force limit (0 = idle, 1 = at the limit, above 1 = over, in reds), the print
-/// circle of `print_radius_mm`, and a colour scale with the limit marked.
+/// use of the force limit (0 = idle, 1 = at the limit, above 1 = over, in reds), the worst
+/// drawn on top, the print circle of `print_radius_mm`, and a colour scale with the limit
+/// marked. Beyond 20 000 points only the worst point of each cell of a 100 × 100 grid is
+/// drawn. Points with a non-finite coordinate or a NaN use are left out.
 pub fn bed_map_svg(
     path: &Path,
     title: &str,
@@ -64,13 +86,16 @@ pub fn bed_map_string(
         .filter(|p| p.0.is_finite() && p.1.is_finite() && !p.2.is_nan())
         .map(|(x, y, u)| (x, y, u.max(0.0)))
         .collect();
-    // The worst points on top.
-    shown.sort_by(|a, b| a.2.total_cmp(&b.2));
     let reach = shown
         .iter()
         .map(|p| p.0.abs().max(p.1.abs()))
         .fold(print_radius_mm, f64::max)
         * 1.08;
+    if shown.len() > MAX_DOTS {
+        shown = worst_per_cell(&shown, reach, CELLS);
+    }
+    // The worst points on top.
+    shown.sort_by(|a, b| a.2.total_cmp(&b.2));
     let worst = shown.last().map_or(0.0, |p| p.2);
     // The scale runs to the limit at least, to the worst point when it is finite.
     let top = if worst.is_finite() {
@@ -152,6 +177,30 @@ mod tests {
         assert_eq!(colour_of(-1.0), colour_of(0.0));
         // Halfway between two stops is the mean of their channels.
         assert_eq!(colour_of(0.125), RGBColor(64, 42, 112));
+    }
+
+    #[test]
+    fn a_large_map_keeps_the_worst_point_of_each_cell() {
+        let points: Vec<(f64, f64, f64)> = (0..100_000)
+            .map(|k| {
+                let th = f64::from(k) * 0.001;
+                let r = 80.0 * f64::from(k % 997) / 997.0;
+                (r * th.cos(), r * th.sin(), 0.5)
+            })
+            .chain([(10.0, 10.0, 1.7)])
+            .collect();
+        let kept = worst_per_cell(&points, 90.0, 50);
+        assert!(kept.len() <= 2500 && kept.len() > 1000, "{}", kept.len());
+        assert!(
+            kept.contains(&(10.0, 10.0, 1.7)),
+            "the over-limit point survives"
+        );
+        let svg = bed_map_string("big", &points, 85.0).unwrap();
+        assert_valid_svg(&svg);
+        let dots = svg.matches("<circle").count();
+        assert!(dots <= CELLS * CELLS, "{dots}");
+        let RGBColor(r, g, b) = colour_of(1.7);
+        assert!(svg.contains(&format!("fill=\"#{r:02X}{g:02X}{b:02X}\"")));
     }
 
     #[test]
