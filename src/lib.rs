@@ -14,5 +14,6 @@ pub mod klipper_import;
 pub mod machine;
 pub mod path;
 pub mod planner;
+pub mod plot;
 pub mod report;
 pub mod resample;

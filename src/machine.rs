@@ -58,10 +58,16 @@ pub struct Extruder {
     pub instantaneous_corner_velocity_mm_s: f64,
 }
 
+/// The carriage motors, resolved: the force limit and the rotor seen at the belt.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Motors {
-    /// Allowed peak |Q_i| per carriage, N.
+    /// Allowed peak |Q_i| per carriage, N: given, or holding torque / pulley pitch radius /
+    /// safety factor.
     pub max_force_n: f64,
+    /// The rotor's inertia reflected to the carriage, J/r² (r the pulley pitch radius), kg;
+    /// 0 when no `rotor_inertia_kg_m2` is given. It adds to the carriage's inertia, not to
+    /// its weight.
+    pub reflected_mass_kg: f64,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -418,7 +424,137 @@ impl Default for RawExtruder {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawMotors {
-    max_force_n: f64,
+    max_force_n: Option<f64>,
+    holding_torque_nm: Option<f64>,
+    pulley_teeth: Option<u32>,
+    belt_pitch_mm: Option<f64>,
+    safety_factor: Option<f64>,
+    rotor_inertia_kg_m2: Option<f64>,
+}
+
+/// GT2 belt pitch, mm.
+const DEFAULT_BELT_PITCH_MM: f64 = 2.0;
+
+impl RawMotors {
+    /// Either `max_force_n`, or `holding_torque_nm` + `safety_factor` on a pulley of
+    /// `pulley_teeth` × `belt_pitch_mm`; the rotor inertia, if given, reflected through
+    /// the same pulley. On a bad combination or figure returns the key and what is wrong.
+    fn resolve(&self) -> Result<Motors, (String, String)> {
+        let radius_m = match (self.pulley_teeth, self.belt_pitch_mm) {
+            (Some(teeth), pitch) => {
+                let pitch = pitch.unwrap_or(DEFAULT_BELT_PITCH_MM);
+                positive("motors.belt_pitch_mm", pitch)?;
+                if teeth == 0 {
+                    return Err(("motors.pulley_teeth".into(), "expected at least 1".into()));
+                }
+                Some(pulley_pitch_radius_m(teeth, pitch))
+            }
+            (None, Some(_)) => {
+                return Err((
+                    "motors.belt_pitch_mm".into(),
+                    "given without `pulley_teeth`".into(),
+                ));
+            }
+            (None, None) => None,
+        };
+        let needs_pulley = |key: &str| {
+            radius_m.ok_or_else(|| {
+                (
+                    format!("motors.{key}"),
+                    "needs `pulley_teeth` (and `belt_pitch_mm`, default 2 for GT2) to convert \
+                     it at the belt"
+                        .to_string(),
+                )
+            })
+        };
+        let max_force_n = match (self.max_force_n, self.holding_torque_nm, self.safety_factor) {
+            (Some(f), None, None) => f,
+            (Some(_), _, _) => {
+                return Err((
+                    "motors".into(),
+                    "expected either `max_force_n` alone or `holding_torque_nm` together with \
+                     `safety_factor` and `pulley_teeth`, not a mix"
+                        .into(),
+                ));
+            }
+            (None, Some(torque), Some(safety)) => {
+                let r = needs_pulley("holding_torque_nm")?;
+                positive("motors.holding_torque_nm", torque)?;
+                if !(safety.is_finite() && safety >= 1.0) {
+                    return Err((
+                        "motors.safety_factor".into(),
+                        format!("expected a finite number >= 1, found {safety}"),
+                    ));
+                }
+                torque / r / safety
+            }
+            (None, Some(_), None) => {
+                return Err((
+                    "motors.holding_torque_nm".into(),
+                    "needs `safety_factor` (holding torque / allowed torque: the torque lost \
+                     at speed, micro-stepping, margin)"
+                        .into(),
+                ));
+            }
+            (None, None, Some(_)) => {
+                return Err((
+                    "motors.safety_factor".into(),
+                    "needs `holding_torque_nm`".into(),
+                ));
+            }
+            (None, None, None) => {
+                return Err((
+                    "motors".into(),
+                    "expected `max_force_n`, or `holding_torque_nm` + `safety_factor` + \
+                     `pulley_teeth`"
+                        .into(),
+                ));
+            }
+        };
+        let reflected_mass_kg = match self.rotor_inertia_kg_m2 {
+            Some(j) => {
+                let r = needs_pulley("rotor_inertia_kg_m2")?;
+                if !(j.is_finite() && j >= 0.0) {
+                    return Err((
+                        "motors.rotor_inertia_kg_m2".into(),
+                        format!("expected a finite number >= 0, found {j}"),
+                    ));
+                }
+                j / (r * r)
+            }
+            None => 0.0,
+        };
+        if radius_m.is_some()
+            && self.holding_torque_nm.is_none()
+            && self.rotor_inertia_kg_m2.is_none()
+        {
+            return Err((
+                "motors.pulley_teeth".into(),
+                "used only with `holding_torque_nm` or `rotor_inertia_kg_m2`".into(),
+            ));
+        }
+        Ok(Motors {
+            max_force_n,
+            reflected_mass_kg,
+        })
+    }
+}
+
+/// Pitch radius of a toothed pulley, m: its pitch circle is `teeth` belt pitches long,
+/// r = teeth · pitch / (2π).
+pub fn pulley_pitch_radius_m(teeth: u32, belt_pitch_mm: f64) -> f64 {
+    f64::from(teeth) * belt_pitch_mm * 1e-3 / std::f64::consts::TAU
+}
+
+fn positive(key: &str, v: f64) -> Result<(), (String, String)> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err((
+            key.into(),
+            format!("expected a finite number > 0, found {v}"),
+        ))
+    }
 }
 
 #[derive(Deserialize)]
@@ -567,9 +703,7 @@ impl RawMachine {
                     .unwrap_or(l.max_accel_mm_s2 * extrude_ratio),
                 instantaneous_corner_velocity_mm_s: e.instantaneous_corner_velocity_mm_s,
             },
-            motors: Motors {
-                max_force_n: self.motors.max_force_n,
-            },
+            motors: self.motors.resolve()?,
             sampling: Sampling {
                 period_s: self.sampling.period_s,
             },
@@ -709,6 +843,234 @@ motors: {max_force_n: 20}
                 e.starts_with(&format!("m.yaml:{line}:")),
                 "{e} (line {line})"
             );
+        }
+    }
+
+    /// KOSSEL with its `motors` section replaced.
+    fn with_motors(motors: &str) -> String {
+        let start = KOSSEL.find("motors:").unwrap();
+        let end = KOSSEL.find("sampling:").unwrap();
+        format!("{}motors:\n{motors}{}", &KOSSEL[..start], &KOSSEL[end..])
+    }
+
+    #[test]
+    fn motor_torque_form_gives_the_force_and_the_rotor_its_reflected_mass() {
+        // GT2 20T: pitch circle 40 mm, r = 40/(2π) = 6.366 mm. 0.4 N·m / r / 2 = 10π N.
+        // NEMA 17 rotor 54 g·cm² = 5.4e-6 kg·m²: J/r² = 5.4e-6 · (2π/0.04)² = 0.133240 kg.
+        let text = with_motors(
+            "  holding_torque_nm: 0.4\n  pulley_teeth: 20\n  safety_factor: 2.0\n  \
+             rotor_inertia_kg_m2: 5.4e-6\n",
+        );
+        let m = Machine::from_yaml_str(&text, "m").unwrap();
+        assert!((m.motors.max_force_n - 31.415_926_5).abs() < 1e-6);
+        assert!((m.motors.reflected_mass_kg - 0.133_240).abs() < 1e-6);
+        // HTD3 16T, pitch 3 mm: r = 48/(2π) = 7.639 mm; 1.2 N·m / r / 3 = 52.36 N.
+        let text = with_motors(
+            "  holding_torque_nm: 1.2\n  pulley_teeth: 16\n  belt_pitch_mm: 3\n  \
+             safety_factor: 3\n",
+        );
+        let m = Machine::from_yaml_str(&text, "m").unwrap();
+        assert!((m.motors.max_force_n - 52.359_878).abs() < 1e-5);
+        assert_eq!(m.motors.reflected_mass_kg, 0.0);
+        // The force form with a rotor: the pulley is needed for J/r² only.
+        let text =
+            with_motors("  max_force_n: 25\n  pulley_teeth: 20\n  rotor_inertia_kg_m2: 5.4e-6\n");
+        let m = Machine::from_yaml_str(&text, "m").unwrap();
+        assert_eq!(m.motors.max_force_n, 25.0);
+        assert!((m.motors.reflected_mass_kg - 0.133_240).abs() < 1e-6);
+        // The shipped profiles have no rotor term.
+        let k = Machine::from_yaml_str(KOSSEL, "k").unwrap();
+        assert_eq!(k.motors.reflected_mass_kg, 0.0);
+    }
+
+    #[test]
+    fn motor_form_errors_name_the_key_and_its_line() {
+        // (motors section, key in the message, text on the reported line)
+        let cases = [
+            (
+                "  max_force_n: 25\n  holding_torque_nm: 0.4\n  safety_factor: 2\n",
+                "motors: expected either `max_force_n` alone",
+                "motors:",
+            ),
+            (
+                "  pulley_teeth: 20\n",
+                "motors: expected `max_force_n`",
+                "motors:",
+            ),
+            (
+                "  holding_torque_nm: 0.4\n  pulley_teeth: 20\n",
+                "motors.holding_torque_nm: needs `safety_factor`",
+                "  holding_torque_nm",
+            ),
+            (
+                "  max_force_n: 25\n  safety_factor: 2\n",
+                "motors: expected either",
+                "motors:",
+            ),
+            (
+                "  holding_torque_nm: 0.4\n  safety_factor: 2\n",
+                "motors.holding_torque_nm: needs `pulley_teeth`",
+                "  holding_torque_nm",
+            ),
+            (
+                "  holding_torque_nm: 0.4\n  pulley_teeth: 20\n  safety_factor: 0.5\n",
+                "motors.safety_factor: expected a finite number >= 1",
+                "  safety_factor",
+            ),
+            (
+                "  holding_torque_nm: -0.4\n  pulley_teeth: 20\n  safety_factor: 2\n",
+                "motors.holding_torque_nm: expected a finite number > 0",
+                "  holding_torque_nm",
+            ),
+            (
+                "  holding_torque_nm: 0.4\n  pulley_teeth: 0\n  safety_factor: 2\n",
+                "motors.pulley_teeth: expected at least 1",
+                "  pulley_teeth",
+            ),
+            (
+                "  max_force_n: 25\n  pulley_teeth: 20\n  belt_pitch_mm: 0\n  \
+                 rotor_inertia_kg_m2: 1e-6\n",
+                "motors.belt_pitch_mm: expected a finite number > 0",
+                "  belt_pitch_mm",
+            ),
+            (
+                "  max_force_n: 25\n  belt_pitch_mm: 2\n",
+                "motors.belt_pitch_mm: given without `pulley_teeth`",
+                "  belt_pitch_mm",
+            ),
+            (
+                "  max_force_n: 25\n  rotor_inertia_kg_m2: 5.4e-6\n",
+                "motors.rotor_inertia_kg_m2: needs `pulley_teeth`",
+                "  rotor_inertia_kg_m2",
+            ),
+            (
+                "  max_force_n: 25\n  pulley_teeth: 20\n  rotor_inertia_kg_m2: -1\n",
+                "motors.rotor_inertia_kg_m2: expected a finite number >= 0",
+                "  rotor_inertia_kg_m2",
+            ),
+            (
+                "  max_force_n: 25\n  pulley_teeth: 20\n",
+                "motors.pulley_teeth: used only with",
+                "  pulley_teeth",
+            ),
+        ];
+        for (motors, message, on_line) in cases {
+            let text = with_motors(motors);
+            let e = error_of(&text);
+            assert!(e.contains(message), "{e}");
+            let line = text.lines().position(|l| l.starts_with(on_line)).unwrap() + 1;
+            assert!(
+                e.starts_with(&format!("m.yaml:{line}:")),
+                "{e} (line {line})"
+            );
+        }
+        // A fractional tooth count is a schema error at its line.
+        let e = error_of(&with_motors(
+            "  holding_torque_nm: 0.4\n  pulley_teeth: 20.5\n  safety_factor: 2\n",
+        ));
+        assert!(e.contains("motors.pulley_teeth"), "{e}");
+    }
+
+    /// The paper's machine with and without a rotor of reflected mass 0.13324 kg.
+    fn paper_models() -> (DeltaModel, DeltaModel, f64) {
+        let paper = include_str!("../machines/paper.yaml");
+        let plain = Machine::from_yaml_str(paper, "p").unwrap();
+        let rotor = paper.replace(
+            "max_force_n: 40.0",
+            "max_force_n: 40.0\n  pulley_teeth: 20\n  rotor_inertia_kg_m2: 5.4e-6",
+        );
+        let rotor = Machine::from_yaml_str(&rotor, "p").unwrap();
+        let m_r = rotor.motors.reflected_mass_kg;
+        assert!(m_r > 0.13);
+        (DeltaModel::new(&plain), DeltaModel::new(&rotor), m_r)
+    }
+
+    #[test]
+    fn the_rotor_adds_inertia_to_the_carriage_but_no_weight() {
+        let (plain, rotor, m_r) = paper_models();
+        let states = [
+            (Vec3::new(0.0, 0.0, 0.0), Vec3::zeros(), Vec3::zeros()),
+            (Vec3::new(40.0, -20.0, 10.0), Vec3::zeros(), Vec3::zeros()),
+            (
+                Vec3::new(40.0, -20.0, 10.0),
+                Vec3::new(150.0, -80.0, 5.0),
+                Vec3::new(-3000.0, 1200.0, 400.0),
+            ),
+            (
+                Vec3::new(-30.0, 50.0, 100.0),
+                Vec3::new(0.0, 200.0, 0.0),
+                Vec3::new(8000.0, 0.0, 0.0),
+            ),
+        ];
+        for (p, v, a) in states {
+            let s0 = plain.evaluate(p, v, a).unwrap();
+            let s1 = rotor.evaluate(p, v, a).unwrap();
+            for i in 0..3 {
+                // Q = (m_c + m_r) q̈ + m_c g + …: the difference is m_r q̈ (q̈ in m/s²).
+                let expected = m_r * s0.ddq_mm_s2[i] * 1e-3;
+                let diff = s1.force_n[i] - s0.force_n[i];
+                assert!(
+                    (diff - expected).abs() < 1e-12 * (1.0 + s0.force_n[i].abs()),
+                    "{diff} vs {expected}"
+                );
+            }
+            // Same weight: same potential energy, and at rest the same (static) forces.
+            assert_eq!(s0.potential_j, s1.potential_j);
+        }
+        assert_eq!(
+            plain.suspended_weight_n(),
+            rotor.suspended_weight_n(),
+            "eq. 17 counts weight only"
+        );
+    }
+
+    #[test]
+    fn eq20_holds_with_the_rotor_against_an_energy_built_from_the_kinematics_alone() {
+        // E(t) = ½(m_c + m_r)Σq̇² + ½ m_p |ṗ|² + g(m_c Σq + m_p z_P), with q from eq. 6 and
+        // q̇ by central differences; its time derivative (differenced) must equal Σ Q_i q̇_i.
+        let (_, rotor, m_r) = paper_models();
+        let (mc, mp, g) = (0.25 + 0.02, 0.5 + 0.06, 9.81);
+        let traj = |t: f64| {
+            let w = [7.0, 11.0];
+            let p = Vec3::new(
+                40.0 * (w[0] * t).sin(),
+                30.0 * (w[1] * t).cos(),
+                20.0 + 5.0 * t,
+            );
+            let v = Vec3::new(
+                40.0 * w[0] * (w[0] * t).cos(),
+                -30.0 * w[1] * (w[1] * t).sin(),
+                5.0,
+            );
+            let a = Vec3::new(
+                -40.0 * w[0] * w[0] * (w[0] * t).sin(),
+                -30.0 * w[1] * w[1] * (w[1] * t).cos(),
+                0.0,
+            );
+            (p, v, a)
+        };
+        let q_m = |t: f64| rotor.inverse(traj(t).0).unwrap().map(|q| q * 1e-3);
+        let energy = |t: f64| {
+            let h = 1e-6;
+            let (qp, qm, q) = (q_m(t + h), q_m(t - h), q_m(t));
+            let (_, v, _) = traj(t);
+            let dq2: f64 = (0..3).map(|i| ((qp[i] - qm[i]) / (2.0 * h)).powi(2)).sum();
+            let kinetic = 0.5 * (mc + m_r) * dq2 + 0.5 * mp * (v * 1e-3).norm_squared();
+            let z_p = traj(t).0.z * 1e-3;
+            kinetic + g * (mc * q.iter().sum::<f64>() + mp * z_p)
+        };
+        for k in 0..50 {
+            let t = 0.013 * k as f64;
+            let (p, v, a) = traj(t);
+            let s = rotor.evaluate(p, v, a).unwrap();
+            let h = 1e-4;
+            let de = (energy(t + h) - energy(t - h)) / (2.0 * h);
+            assert!(
+                (de - s.power_w).abs() < 1e-4 * (1.0 + s.power_w.abs()),
+                "t={t}: {de} vs {}",
+                s.power_w
+            );
+            assert!((s.energy_rate_w - s.power_w).abs() < 1e-9 * (1.0 + s.power_w.abs()));
         }
     }
 

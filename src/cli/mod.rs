@@ -3,6 +3,7 @@
 mod annotate;
 mod check;
 mod common;
+mod plot;
 mod pose;
 mod profile;
 mod replace;
@@ -33,6 +34,8 @@ pub enum Command {
     Pose(pose::Args),
     /// Validate a machine profile and print its derived figures.
     Machine(profile::Args),
+    /// Plot trace columns (CSV from `trace`) against time as SVG.
+    Plot(plot::Args),
 }
 
 /// Exit code for a usage, input or profile error.
@@ -56,6 +59,7 @@ pub fn main() -> ExitCode {
         Command::Trace(args) => trace::run(args),
         Command::Pose(args) => pose::run(args),
         Command::Machine(args) => profile::run(args),
+        Command::Plot(args) => plot::run(args),
     };
     match result {
         Ok(code) => code,

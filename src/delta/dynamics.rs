@@ -83,18 +83,26 @@ impl DeltaModel {
             let dz = v[2] - dq[i];
             ddq[i] = (dot(rows[i], a) - (v[0] * v[0] + v[1] * v[1] + dz * dz)) * inv_jq;
             // eq. 14 (Jq Jx⁻ᵀ is dimensionless: mm · 1/mm).
-            force[i] = self.carriage_kg * (ddq[i] * MM + g) + self.platform_kg * jq * w[i];
+            // The carriage's inertia and weight differ by the reflected rotor mass.
+            force[i] = self.carriage_inertia_kg * ddq[i] * MM
+                + self.carriage_weight_kg * g
+                + self.platform_kg * jq * w[i];
             // eq. 13, Jx in m: Jx⁻ᵀ in 1/m = 1000 × its value in 1/mm.
             lambda[i] = 0.5 * self.platform_kg * w[i] / MM;
         }
-        let (mc, mp) = (self.carriage_kg, self.platform_kg);
+        // K with the carriages' inertia, U with their weight (the rotor adds only to K).
+        let (mi, mw, mp) = (
+            self.carriage_inertia_kg,
+            self.carriage_weight_kg,
+            self.platform_kg,
+        );
         let ones = [1.0; 3];
-        let kinetic_j = 0.5 * (mc * dot(dq, dq) + mp * dot(v, v)) * MM * MM;
-        let potential_j = g * (mc * dot(q, ones) + mp * p[2]) * MM;
+        let kinetic_j = 0.5 * (mi * dot(dq, dq) + mp * dot(v, v)) * MM * MM;
+        let potential_j = g * (mw * dot(q, ones) + mp * p[2]) * MM;
         let power_w = dot(force, dq) * MM;
         // eq. 20, left side: d/dt of the two lines above.
-        let energy_rate_w = (mc * dot(dq, ddq) + mp * dot(v, a)) * MM * MM
-            + g * (mc * dot(dq, ones) + mp * v[2]) * MM;
+        let energy_rate_w = (mi * dot(dq, ddq) + mp * dot(v, a)) * MM * MM
+            + g * (mw * dot(dq, ones) + mp * v[2]) * MM;
         let arm2_sum = self.arm2_mm2[0] + self.arm2_mm2[1] + self.arm2_mm2[2];
         let inv_f2 =
             (dot(cof[0], cof[0]) + dot(cof[1], cof[1]) + dot(cof[2], cof[2])) * inv_det * inv_det;

@@ -76,8 +76,11 @@ pub struct DeltaModel {
     nozzle_offset_mm: f64,
     /// Carriage heights at G28 home, the top of their travel, mm.
     top_mm: [f64; 3],
-    /// m_cart + m_link (Fig. 2), kg.
-    carriage_kg: f64,
+    /// m_cart + m_link (Fig. 2), the weight on each carriage, kg.
+    carriage_weight_kg: f64,
+    /// m_cart + m_link + the motor rotor's reflected mass J/r², the inertia of each
+    /// carriage, kg. The rotor turns about a fixed axis: it adds inertia, not weight.
+    carriage_inertia_kg: f64,
     /// m_plat + 3 m_link (Fig. 2), kg.
     platform_kg: f64,
     gravity_m_s2: f64,
@@ -100,7 +103,8 @@ impl DeltaModel {
             arm2_mm2: g.arm_length_mm.map(|l| l * l),
             nozzle_offset_mm: g.nozzle_offset_mm,
             top_mm: [f64::INFINITY; 3],
-            carriage_kg: m.cart_kg + m.link_kg,
+            carriage_weight_kg: m.cart_kg + m.link_kg,
+            carriage_inertia_kg: m.cart_kg + m.link_kg + machine.motors.reflected_mass_kg,
             platform_kg: m.platform_kg + 3.0 * m.link_kg,
             gravity_m_s2: machine.gravity_m_s2,
             singular_det_mm3: 1e-9 * g.arm_length_mm.iter().product::<f64>(),

@@ -13,7 +13,7 @@ impl DeltaModel {
     /// Total weight of the suspended masses, the sum of the static forces anywhere
     /// (eq. 17): (6 m_link + m_plat + 3 m_cart) g, N.
     pub fn suspended_weight_n(&self) -> f64 {
-        (3.0 * self.carriage_kg + self.platform_kg) * self.gravity_m_s2
+        (3.0 * self.carriage_weight_kg + self.platform_kg) * self.gravity_m_s2
     }
 
     /// The largest static force on any carriage over the disc of `radius_mm` on the bed

@@ -42,7 +42,10 @@ pub(super) fn machine() -> Machine {
             max_extrude_only_accel_mm_s2: 500.0,
             instantaneous_corner_velocity_mm_s: 1.0,
         },
-        motors: Motors { max_force_n: 40.0 },
+        motors: Motors {
+            max_force_n: 40.0,
+            reflected_mass_kg: 0.0,
+        },
         sampling: Sampling { period_s: 0.001 },
         gravity_m_s2: 9.81,
     }
