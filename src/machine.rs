@@ -192,6 +192,16 @@ impl Machine {
                 return err(key, format!("expected a finite number > 0, found {v}"));
             }
         }
+        // A shorter period makes every move millions of samples: the run would seem to hang.
+        let period = self.sampling.period_s;
+        if !(MIN_PERIOD_S..=MAX_PERIOD_S).contains(&period) {
+            return err(
+                "sampling.period_s",
+                format!(
+                    "expected a period between {MIN_PERIOD_S} and {MAX_PERIOD_S} s, found {period}"
+                ),
+            );
+        }
         let extruder = [
             (
                 "extruder.max_extrude_only_velocity_mm_s",
@@ -258,6 +268,10 @@ impl Machine {
         Ok(())
     }
 }
+
+/// The sampling periods a profile may ask for, s (1 µs to 1 s).
+const MIN_PERIOD_S: f64 = 1e-6;
+const MAX_PERIOD_S: f64 = 1.0;
 
 /// Tower names in order (towers 1, 2, 3 of the paper).
 pub const TOWER_NAMES: [char; 3] = ['A', 'B', 'C'];

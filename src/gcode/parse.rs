@@ -70,8 +70,10 @@ pub enum Command<'a> {
 pub enum DiagKind {
     /// `*` checksum differs from the XOR of the bytes before it.
     Checksum { computed: u8, written: u32 },
-    /// A value that is not a number (`X1.2.3`, `X-`, `Xabc`, out of range).
+    /// A value that is not a number (`X1.2.3`, `X-`, `Xabc`).
     MalformedNumber,
+    /// A number beyond ±[`MAX_NUMBER`] (`X1000000000000`).
+    NumberOutOfRange,
     /// `e`/`E` right after a number (`F1.2e3`) starts an E word.
     ExponentReadAsE,
     /// A character that starts no word.
@@ -105,6 +107,9 @@ impl LineDiag {
             DiagKind::MalformedNumber => {
                 "malformed number: expected digits with an optional sign and decimal point"
                     .to_string()
+            }
+            DiagKind::NumberOutOfRange => {
+                format!("number out of range: at most {MAX_NUMBER:e} in magnitude")
             }
             DiagKind::ExponentReadAsE => "`e` right after a number starts an E word (exponents \
                  are not G-code; Marlin 2 and Klipper read it the same way)"
@@ -531,7 +536,14 @@ fn classic_words<'a>(p: &mut ParsedLine<'a>, line: &'a [u8], mut rest: &'a [u8])
                     } else {
                         Severity::Warning
                     };
-                    p.diag(value_col, sev, DiagKind::MalformedNumber);
+                    // Digits that end well but give no value: too large.
+                    let text = &r[..r.len() - r2.len()];
+                    let kind = if ends_well && text.iter().any(u8::is_ascii_digit) {
+                        DiagKind::NumberOutOfRange
+                    } else {
+                        DiagKind::MalformedNumber
+                    };
+                    p.diag(value_col, sev, kind);
                     // Skip the bad token.
                     let n = r2.iter().position(|&b| is_space(b)).unwrap_or(r2.len());
                     &r2[n..]
@@ -881,7 +893,16 @@ mod tests {
         assert_eq!(p.diags()[0].severity, Severity::Warning);
         // Out of range (no overflow to infinity).
         let big = format!("G1 X{}", "9".repeat(400));
-        assert!(parse_line(big.as_bytes()).has_error());
+        let p = parse_line(big.as_bytes());
+        assert!(p.has_error());
+        assert_eq!(p.diags()[0].kind, DiagKind::NumberOutOfRange);
+        assert_eq!(p.diags()[0].column, 5);
+        assert!(p.diags()[0].message().contains("out of range"));
+        assert_eq!(
+            parse_line(b"G1 X1000000001").diags()[0].kind,
+            DiagKind::NumberOutOfRange
+        );
+        assert!(parse_line(b"G1 X999999999").diags().is_empty());
     }
 
     #[test]

@@ -118,7 +118,7 @@ impl MoveLimits {
             f64::INFINITY
         };
         let path_d = m.path.length_mm();
-        if !path_d.is_finite() || !m.e_mm.is_finite() {
+        if !path_d.is_finite() || !m.e_mm.is_finite() || !valid_path(&m.path) {
             return None;
         }
         let kinematic = path_d >= MIN_KINEMATIC_D_MM;
@@ -151,7 +151,12 @@ impl MoveLimits {
             let cap_v2 = q.accel_mm_s2 * m.path.min_radius_mm();
             q.max_cruise_v2 = q.max_cruise_v2.min(cap_v2);
         }
-        Some(q)
+        // Limits divided by an extrusion ratio far beyond any G-code's (|E| ~ 1e300) leave a
+        // speed whose square underflows: nothing can be planned, not even in finite time.
+        let plannable = q.max_cruise_v2 > 0.0
+            && q.accel_mm_s2 > 0.0
+            && (q.move_d_mm / q.max_cruise_v2.sqrt()).is_finite();
+        plannable.then_some(q)
     }
 
     /// delta.py `check_move`: Z moves scaled to max_z_velocity / max_z_accel; half, then a
@@ -193,6 +198,29 @@ impl MoveLimits {
     }
 }
 
+/// Whether every number of a path is finite and an arc's radius positive (the contract of
+/// `path::Arc`). The length alone can be finite when the path is not: an arc of a tiny
+/// sweep around an infinite centre.
+fn valid_path(p: &Path) -> bool {
+    match p {
+        Path::Line { start, end } => start.iter().chain(end.iter()).all(|v| v.is_finite()),
+        Path::Arc(a) => {
+            [
+                a.center_mm[0],
+                a.center_mm[1],
+                a.radius_mm,
+                a.start_angle_rad,
+                a.sweep_rad,
+                a.z_start_mm,
+                a.z_delta_mm,
+            ]
+            .iter()
+            .all(|v| v.is_finite())
+                && a.radius_mm > 0.0
+        }
+    }
+}
+
 /// Radius (mm) beyond which a carriage of the delta can move `ratio` times faster than the
 /// nozzle: delta.py `ratio_to_xy` with a zero step distance, ratio·l/√(ratio² + 1) − R, for
 /// the shortest arm l and delta radius R. (Squared as delta.py squares it.)
@@ -219,6 +247,49 @@ mod tests {
         let m = machine();
         assert!((slow_radius_mm(&m, 3.0) - 98.9669).abs() < 1e-4);
         assert!((slow_radius_mm(&m, 6.0) - 107.0747).abs() < 1e-4);
+    }
+
+    #[test]
+    fn a_path_with_a_non_finite_number_or_no_radius_is_dropped() {
+        let limits = MoveLimits::new(&machine());
+        let arc = crate::path::Arc {
+            center_mm: [f64::NEG_INFINITY, f64::NAN],
+            radius_mm: 180.0,
+            start_angle_rad: 0.0,
+            sweep_rad: 1e-300,
+            z_start_mm: 0.0,
+            z_delta_mm: 0.0,
+        };
+        let mv = |path| Move {
+            line: 1,
+            path,
+            e_mm: 1.0,
+            feed_mm_s: 10.0,
+        };
+        // The arc's length is finite (180 · 1e-300) though its centre is not.
+        assert!(Path::Arc(arc).length_mm().is_finite());
+        assert!(limits.queued_move(&mv(Path::Arc(arc))).is_none());
+        let flat = crate::path::Arc {
+            center_mm: [0.0, 0.0],
+            radius_mm: -0.0,
+            z_delta_mm: 100.0,
+            ..arc
+        };
+        assert!(limits.queued_move(&mv(Path::Arc(flat))).is_none());
+        let p = crate::path::Vec3::new(0.0, 0.0, 10.0);
+        assert!(limits.queued_move(&mv(Path::line(p, p))).is_some());
+        // A retract of 1e300 mm over 10 mm: the extruder cap's speed² underflows to 0.
+        let q = crate::path::Vec3::new(0.0, 10.0, 10.0);
+        let huge_retract = Move {
+            e_mm: -1e300,
+            ..mv(Path::line(p, q))
+        };
+        assert!(limits.queued_move(&huge_retract).is_none());
+        let retract = Move {
+            e_mm: -1e6,
+            ..mv(Path::line(p, q))
+        };
+        assert!(limits.queued_move(&retract).is_some());
     }
 
     #[test]

@@ -36,6 +36,15 @@ impl Problem {
             Problem::OutsideRadius { .. } => "outside_radius",
         }
     }
+
+    /// Rank among the problems of one move: the higher one is reported.
+    fn severity(&self) -> u8 {
+        match self {
+            Problem::Unreachable { .. } => 2,
+            Problem::AboveHome { .. } => 1,
+            Problem::OutsideRadius { .. } => 0,
+        }
+    }
 }
 
 /// What one move asked of the motors.
@@ -81,9 +90,15 @@ impl MoveStats {
         self.max_energy_residual_w = self.max_energy_residual_w.max(energy_residual_w);
     }
 
-    /// Records a problem; only the first one of a move is kept.
+    /// Records a problem. A move keeps its most severe one (unreachable, then above home,
+    /// then outside the radius), the first of that kind: a move that leaves the print disc
+    /// and then the arms' reach is reported unreachable.
     pub fn flag(&mut self, problem: Problem) {
-        if self.problem.is_none() {
+        if self
+            .problem
+            .as_ref()
+            .is_none_or(|p| problem.severity() > p.severity())
+        {
             self.problem = Some(problem);
         }
     }
@@ -124,20 +139,34 @@ mod tests {
     }
 
     #[test]
-    fn only_the_first_problem_is_kept() {
+    fn the_most_severe_problem_is_kept_first_of_its_kind() {
         let mut s = MoveStats::new(1);
-        s.flag(Problem::OutsideRadius {
+        let outside = Problem::OutsideRadius {
             radius_mm: 90.0,
             limit_mm: 85.0,
-        });
-        s.flag(Problem::AboveHome {
-            t_s: 0.0,
+        };
+        s.flag(outside.clone());
+        assert_eq!(s.problem, Some(outside));
+        let above = |t_s| Problem::AboveHome {
+            t_s,
             tower: 0,
             over_mm: 1.0,
+        };
+        s.flag(above(0.5));
+        s.flag(above(0.7));
+        assert_eq!(s.problem, Some(above(0.5)));
+        let unreachable = Problem::Unreachable {
+            t_s: 0.9,
+            tower: Some(1),
+            pos_mm: [300.0, 0.0, 10.0],
+            reason: "arm too short".into(),
+        };
+        s.flag(unreachable.clone());
+        s.flag(above(1.0));
+        s.flag(Problem::OutsideRadius {
+            radius_mm: 300.0,
+            limit_mm: 85.0,
         });
-        assert_eq!(
-            s.problem.as_ref().map(Problem::kind),
-            Some("outside_radius")
-        );
+        assert_eq!(s.problem, Some(unreachable));
     }
 }

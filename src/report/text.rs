@@ -22,6 +22,13 @@ pub fn write_text(out: &mut (impl Write + ?Sized), report: &Report) -> io::Resul
             "{}: FAIL, {} of {} moves exceed the limits of {} (force limit {limit:.1} N)",
             report.file, s.violations, s.moves, report.machine
         )?;
+    } else if s.errors > 0 {
+        // Lines with errors were skipped: the moves checked are not the whole file.
+        writeln!(
+            out,
+            "{}: ERROR, {} input errors (lines skipped); the {} moves read are within the limits of {} (force limit {limit:.1} N)",
+            report.file, s.errors, s.moves, report.machine
+        )?;
     } else {
         writeln!(
             out,
@@ -127,6 +134,25 @@ mod tests {
         assert!(lines[4].contains("-1.2 N"), "{text}");
         assert!(lines[4].contains("tower A: G1 X10 Y20 F9000"), "{text}");
         assert!(text.contains("print time    0:00:04 (3.5 s)"), "{text}");
+    }
+
+    #[test]
+    fn input_errors_are_not_ok() {
+        let mut r = Report::new("bad.gcode", "M", 25.0, false);
+        r.add_diagnostic(&crate::gcode::Diagnostic {
+            line: 2,
+            column: 5,
+            severity: crate::gcode::Severity::Error,
+            message: "malformed number".into(),
+        });
+        let mut buf = Vec::new();
+        write_text(&mut buf, &r).unwrap();
+        let text = String::from_utf8(buf).unwrap();
+        assert!(
+            text.starts_with("bad.gcode: ERROR, 1 input errors (lines skipped)"),
+            "{text}"
+        );
+        assert!(!text.contains("OK"), "{text}");
     }
 
     #[test]
