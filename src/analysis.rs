@@ -16,21 +16,40 @@ use rayon::prelude::*;
 use crate::delta::{DeltaModel, Unreachable};
 use crate::gcode::{self, Diagnostic, Event, ReadStats};
 use crate::machine::Machine;
+use crate::path::Vec3;
 use crate::planner::{PlannedMove, Planner};
-use crate::report::{MoveStats, Problem, Report};
+use crate::report::{MoveStats, NEAR_SINGULAR_RATIO, Problem, Report};
 use crate::resample::sample_move;
 
 /// Planned moves handed to the parallel stage at a time.
 const BATCH: usize = 4096;
 
-/// Tolerance on the print radius, mm: rounding in slicer output.
-const RADIUS_TOLERANCE_MM: f64 = 1e-3;
+/// Tolerance on the print radius and the bed, mm: rounding in slicer output.
+const GEOMETRY_TOLERANCE_MM: f64 = 1e-3;
+
+/// A move longer than this many sampling periods (2.8 h at 1 kHz) is not sampled: only its
+/// ends are checked. Nothing printable lasts that long; a feed rate near zero or a huge
+/// coordinate does, and would otherwise keep the check busy for hours.
+const MAX_SAMPLES_PER_MOVE: f64 = 1e7;
 
 /// What the model found for one planned move.
 pub struct MoveResult {
     pub stats: MoveStats,
     /// The move's rows of the trace CSV, when a trace was asked for.
     pub trace: String,
+    /// (t, forces) of the move's samples inside [`RunOptions::window_s`].
+    pub window: Vec<(f64, [f64; 3])>,
+    /// Where the move ends on the bed, mm.
+    pub end_xy_mm: [f64; 2],
+}
+
+/// What a run collects besides the per-move statistics.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RunOptions {
+    /// Write the trace CSV rows of every sample.
+    pub trace: bool,
+    /// Keep the forces of the samples in this time span (s), for a plot.
+    pub window_s: Option<(f64, f64)>,
 }
 
 /// Totals of one run, besides the per-move results.
@@ -54,14 +73,14 @@ const BATCHES_IN_FLIGHT: usize = 2;
 pub fn run<R: Read>(
     input: R,
     machine: &Machine,
-    trace: bool,
+    options: RunOptions,
     mut on_move: impl FnMut(MoveResult) + Send,
     on_diag: impl FnMut(Diagnostic),
 ) -> io::Result<RunTotals> {
     let (to_model, batches) = mpsc::sync_channel::<Vec<PlannedMove>>(BATCHES_IN_FLIGHT);
     std::thread::scope(|scope| {
         let model = scope.spawn(move || {
-            let mut stage = ModelStage::new(machine, trace);
+            let mut stage = ModelStage::new(machine, options);
             for batch in batches {
                 stage.pending.extend(batch);
                 stage.process(false, &mut on_move);
@@ -102,19 +121,19 @@ pub fn run<R: Read>(
 struct ModelStage<'m> {
     machine: &'m Machine,
     model: DeltaModel,
-    trace: bool,
+    options: RunOptions,
     pending: Vec<PlannedMove>,
     /// The last move processed: the previous move of the next batch's first.
     prev: Option<PlannedMove>,
 }
 
 impl<'m> ModelStage<'m> {
-    fn new(machine: &'m Machine, trace: bool) -> Self {
+    fn new(machine: &'m Machine, options: RunOptions) -> Self {
         let model = DeltaModel::new(machine);
         ModelStage {
             machine,
             model,
-            trace,
+            options,
             pending: Vec::new(),
             prev: None,
         }
@@ -141,7 +160,7 @@ impl<'m> ModelStage<'m> {
                 } else {
                     pending.get(i - 1)
                 };
-                if self.trace {
+                if self.options.trace {
                     self.evaluate::<true>(before, &pending[i], pending.get(i + 1))
                 } else {
                     self.evaluate::<false>(before, &pending[i], pending.get(i + 1))
@@ -163,15 +182,33 @@ impl<'m> ModelStage<'m> {
     ) -> MoveResult {
         let mut stats = MoveStats::new(mv.line);
         let mut trace = String::new();
-        let limit_mm = self.machine.geometry.print_radius_mm;
-        let radius_mm = mv.path.max_xy2_mm2().sqrt();
-        if radius_mm > limit_mm + RADIUS_TOLERANCE_MM {
-            stats.flag(Problem::OutsideRadius {
-                radius_mm,
-                limit_mm,
+        let mut window = Vec::new();
+        let end = mv.path.end();
+        let end_xy_mm = [end.x, end.y];
+        let (from_s, to_s) = self
+            .options
+            .window_s
+            .unwrap_or((f64::INFINITY, f64::NEG_INFINITY));
+        self.check_geometry(mv, &mut stats);
+        let period_s = self.machine.sampling.period_s;
+        if mv.duration_s() > MAX_SAMPLES_PER_MOVE * period_s {
+            stats.flag(Problem::NotSampled {
+                duration_s: mv.duration_s(),
             });
+            for (u, t_s) in [(0.0, mv.t0_s), (1.0, mv.t0_s + mv.duration_s())] {
+                let pos = mv.path.point(u);
+                if let Err(e) = self.model.inverse(pos) {
+                    stats.flag(unreachable(e, t_s, pos));
+                }
+            }
+            return MoveResult {
+                stats,
+                trace,
+                window,
+                end_xy_mm,
+            };
         }
-        sample_move(prev, mv, next, self.machine.sampling.period_s, &mut |s| {
+        sample_move(prev, mv, next, period_s, &mut |s| {
             match self.model.evaluate(s.pos_mm, s.vel_mm_s, s.acc_mm_s2) {
                 Ok(st) => {
                     stats.add(
@@ -180,6 +217,9 @@ impl<'m> ModelStage<'m> {
                         st.force_n,
                         (st.energy_rate_w - st.power_w).abs(),
                     );
+                    if s.t_s >= from_s && s.t_s <= to_s {
+                        window.push((s.t_s, st.force_n));
+                    }
                     if TRACE {
                         let p = &s.pos_mm;
                         let v = &s.vel_mm_s;
@@ -217,20 +257,58 @@ impl<'m> ModelStage<'m> {
                         );
                     }
                 }
-                Err(Unreachable::AboveTop { tower, over_mm }) => stats.flag(Problem::AboveHome {
-                    t_s: s.t_s,
-                    tower,
-                    over_mm,
-                }),
-                Err(e) => stats.flag(Problem::Unreachable {
-                    t_s: s.t_s,
-                    tower: e.tower(),
-                    pos_mm: [s.pos_mm.x, s.pos_mm.y, s.pos_mm.z],
-                    reason: e.to_string(),
-                }),
+                Err(e) => stats.flag(unreachable(e, s.t_s, s.pos_mm)),
             }
         });
-        MoveResult { stats, trace }
+        MoveResult {
+            stats,
+            trace,
+            window,
+            end_xy_mm,
+        }
+    }
+
+    /// The checks on the move's path as a whole: the print disc, the bed, and how close
+    /// the arms come to flat (the carriage speed ratio peaks where the path is farthest
+    /// from a tower).
+    fn check_geometry(&self, mv: &PlannedMove, stats: &mut MoveStats) {
+        let limit_mm = self.machine.geometry.print_radius_mm;
+        let radius_mm = mv.path.max_xy2_mm2().sqrt();
+        if radius_mm > limit_mm + GEOMETRY_TOLERANCE_MM {
+            stats.flag(Problem::OutsideRadius {
+                radius_mm,
+                limit_mm,
+            });
+        }
+        let z_mm = mv.path.min_z_mm();
+        if z_mm < -GEOMETRY_TOLERANCE_MM {
+            stats.flag(Problem::BelowBed { z_mm });
+        }
+        for (tower, xy) in self.model.towers_xy_mm().into_iter().enumerate() {
+            let ratio = self
+                .model
+                .carriage_speed_ratio(tower, mv.path.max_dist2_from_mm2(xy).sqrt());
+            if ratio > NEAR_SINGULAR_RATIO && stats.near_singular.is_none_or(|(_, r)| ratio > r) {
+                stats.near_singular = Some((tower, ratio));
+            }
+        }
+    }
+}
+
+/// The problem of a pose the model cannot take.
+fn unreachable(e: Unreachable, t_s: f64, pos: Vec3) -> Problem {
+    match e {
+        Unreachable::AboveTop { tower, over_mm } => Problem::AboveHome {
+            t_s,
+            tower,
+            over_mm,
+        },
+        e => Problem::Unreachable {
+            t_s,
+            tower: e.tower(),
+            pos_mm: [pos.x, pos.y, pos.z],
+            reason: e.to_string(),
+        },
     }
 }
 
@@ -253,7 +331,7 @@ pub fn check_file(
     let totals = run(
         BufReader::with_capacity(1 << 16, input),
         machine,
-        false,
+        RunOptions::default(),
         |r| report.add_move(&r.stats),
         |d| diags.push(d),
     )

@@ -127,24 +127,35 @@ impl Path {
     /// Largest distance of the path from the Z axis, squared (mm²): the planner's and the
     /// report's "outside the print radius" test.
     pub fn max_xy2_mm2(&self) -> f64 {
-        let xy2 = |p: Vec3| p.x * p.x + p.y * p.y;
+        self.max_dist2_from_mm2([0.0, 0.0])
+    }
+
+    /// Largest horizontal distance of the path from the vertical line through `xy`, squared
+    /// (mm²): the farthest point from the Z axis, or from a tower.
+    pub fn max_dist2_from_mm2(&self, xy: [f64; 2]) -> f64 {
+        let d2 = |p: Vec3| (p.x - xy[0]).powi(2) + (p.y - xy[1]).powi(2);
+        let ends = d2(self.start()).max(d2(self.end()));
         match self {
-            Path::Line { start, end } => xy2(*start).max(xy2(*end)),
+            Path::Line { .. } => ends,
             Path::Arc(a) => {
-                let c = a.center_mm[0].hypot(a.center_mm[1]);
-                // The farthest point of the full circle lies at the centre's polar angle;
-                // it counts only when the arc sweeps over it.
-                let far = a.center_mm[1].atan2(a.center_mm[0]);
-                let ends = xy2(self.start()).max(xy2(self.end()));
-                if c > 0.0 && sweeps_over(a, far) {
-                    ends.max((c + a.radius_mm).powi(2))
-                } else if c == 0.0 {
+                let (cx, cy) = (a.center_mm[0] - xy[0], a.center_mm[1] - xy[1]);
+                let c = cx.hypot(cy);
+                // The farthest point of the full circle lies at the centre's polar angle
+                // (seen from `xy`); it counts only when the arc sweeps over it.
+                if c == 0.0 {
                     a.radius_mm * a.radius_mm
+                } else if sweeps_over(a, cy.atan2(cx)) {
+                    ends.max((c + a.radius_mm).powi(2))
                 } else {
                     ends
                 }
             }
         }
+    }
+
+    /// Lowest z of the path, mm (z is linear along lines and helices).
+    pub fn min_z_mm(&self) -> f64 {
+        self.start().z.min(self.end().z)
     }
 }
 
@@ -244,6 +255,14 @@ mod tests {
         // The far side (angle π) is not swept: the largest radius is at an end.
         let l = Path::line(Vec3::new(3.0, 4.0, 0.0), Vec3::new(0.0, 1.0, 0.0));
         assert_eq!(l.max_xy2_mm2(), 25.0);
+        // Seen from (20, 0), the arc's farthest point is at angle π: (5, 0), 15 mm away,
+        // which the arc does not sweep; its ends are √((20−13.536)² + 3.536²) away.
+        let end = 10.0 + 5.0 * (FRAC_PI_2 / 2.0).cos();
+        let expect = (20.0 - end).powi(2) + (5.0 * (FRAC_PI_2 / 2.0).sin()).powi(2);
+        assert!((a.max_dist2_from_mm2([20.0, 0.0]) - expect).abs() < 1e-9);
+        // Seen from (0, 0) it is the far side again; from (10, 0), the centre, the radius.
+        assert!((a.max_dist2_from_mm2([0.0, 0.0]) - 225.0).abs() < 1e-9);
+        assert!((a.max_dist2_from_mm2([10.0, 0.0]) - 25.0).abs() < 1e-9);
     }
 
     #[test]

@@ -377,3 +377,28 @@ fn trace_power_equals_the_energy_rate() {
     assert!(compared > 1000, "{compared}");
     assert!(worst < 0.02 * scale, "worst {worst} W of {scale} W");
 }
+
+#[test]
+fn plot_writes_forces_and_bed_map() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = run(&[
+        "check",
+        &path("samples/over-limit.gcode"),
+        "-m",
+        &path(KOSSEL),
+        "--plot",
+        &dir.path().display().to_string(),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    for name in ["over-limit-forces.svg", "over-limit-bed.svg"] {
+        let svg = fs::read_to_string(dir.path().join(name)).unwrap();
+        assert!(
+            svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"),
+            "{name}"
+        );
+        assert!(!svg.contains("NaN"), "{name}");
+    }
+    // The forces plot is centred on the worst violation (line 19 at t = 4.909 s).
+    let forces = fs::read_to_string(dir.path().join("over-limit-forces.svg")).unwrap();
+    assert!(forces.contains("t = 4.909 s"), "title");
+}

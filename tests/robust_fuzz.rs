@@ -136,6 +136,11 @@ fn check_stats(s: &MoveStats) {
             radius_mm,
             limit_mm,
         }) => assert!(radius_mm.is_finite() && limit_mm.is_finite(), "{s:?}"),
+        Some(Problem::BelowBed { z_mm }) => assert!(z_mm.is_finite(), "{s:?}"),
+        Some(Problem::NotSampled { duration_s }) => assert!(duration_s.is_finite(), "{s:?}"),
+    }
+    if let Some((_, ratio)) = s.near_singular {
+        assert!(ratio > 0.0 && !ratio.is_nan(), "{s:?}");
     }
 }
 
@@ -200,7 +205,10 @@ fn check_pipeline(data: &[u8], machine: &Machine, trace: bool) {
     let totals = analysis::run(
         data,
         machine,
-        trace,
+        analysis::RunOptions {
+            trace,
+            window_s: Some((0.0, 1.0)),
+        },
         |r: MoveResult| {
             moves += 1;
             check_stats(&r.stats);

@@ -232,8 +232,9 @@ fn interrupted_while_writing() {
         if seen && !status.success() {
             assert_eq!(now, data, "{signal}: killed, yet the file changed");
             let left = leftovers(dir.path(), &["big.gcode"]);
-            // Today the temporary file stays (no signal handler): a stale
-            // `.big.gcode.*.delta-gcode.tmp` beside the original. See docs/robustness.md.
+            // The signal ends the process before it can remove its temporary file: a
+            // `.big.gcode.*.delta-gcode.tmp` stays beside the original until the next run on
+            // the same file removes it as stale (src/cli/replace.rs).
             for name in &left {
                 assert!(
                     name.starts_with(".big.gcode.") && name.ends_with(".delta-gcode.tmp"),

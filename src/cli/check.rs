@@ -4,7 +4,10 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use rayon::prelude::*;
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use anyhow::Context;
 
 use super::common::{MachineArg, Progress, check_with_progress, print_diagnostics};
 use crate::report::{Report, write_github, write_json, write_text};
@@ -32,6 +35,10 @@ pub struct Args {
     /// No progress bar
     #[arg(long, short)]
     pub quiet: bool,
+    /// Write SVG plots into DIR: each file's tower forces around its worst moment
+    /// (STEM-forces.svg) and a map of the bed by peak-force use (STEM-bed.svg)
+    #[arg(long, value_name = "DIR")]
+    pub plot: Option<PathBuf>,
 }
 
 /// Exit code 1: some move exceeds a limit or cannot be reached.
@@ -40,11 +47,14 @@ pub const EXIT_VIOLATION: u8 = 1;
 pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let machine = args.machine.load()?;
     let progress = Progress::new(args.quiet);
-    let results: Vec<anyhow::Result<Report>> = args
-        .files
-        .par_iter()
-        .map(|f| check_with_progress(f, &machine, args.all_moves, &progress))
-        .collect();
+    let results = for_each_file_in_parallel(&args.files, |f| {
+        let report = check_with_progress(f, &machine, args.all_moves, &progress)?;
+        if let Some(dir) = &args.plot {
+            super::check_plots::write_plots(f, &machine, &report, dir)
+                .with_context(|| format!("plotting {}", f.display()))?;
+        }
+        Ok(report)
+    });
     let mut reports = Vec::new();
     let mut input_error = false;
     for result in results {
@@ -85,4 +95,44 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     } else {
         ExitCode::SUCCESS
     })
+}
+
+/// Runs `check` over the files on a few threads of their own, results in argument order.
+///
+/// Not on the rayon pool: each file's pipeline blocks on its channel and its model thread,
+/// which itself needs the rayon pool; files on the pool could take every worker and wait
+/// forever.
+fn for_each_file_in_parallel(
+    files: &[PathBuf],
+    check: impl Fn(&PathBuf) -> anyhow::Result<Report> + Sync,
+) -> Vec<anyhow::Result<Report>> {
+    let workers = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(files.len());
+    let next = AtomicUsize::new(0);
+    let slots: Vec<Mutex<Option<anyhow::Result<Report>>>> =
+        files.iter().map(|_| Mutex::new(None)).collect();
+    std::thread::scope(|scope| {
+        for _ in 0..workers {
+            scope.spawn(|| {
+                loop {
+                    let i = next.fetch_add(1, Ordering::Relaxed);
+                    let Some(file) = files.get(i) else { break };
+                    let result = check(file);
+                    if let Ok(mut slot) = slots[i].lock() {
+                        *slot = Some(result);
+                    }
+                }
+            });
+        }
+    });
+    slots
+        .into_iter()
+        .map(|slot| {
+            slot.into_inner()
+                .ok()
+                .flatten()
+                .unwrap_or_else(|| Err(anyhow::anyhow!("internal error: a file was not checked")))
+        })
+        .collect()
 }

@@ -2,7 +2,9 @@
 
 mod annotate;
 mod check;
+mod check_plots;
 mod common;
+mod import_klipper;
 mod plot;
 mod pose;
 mod profile;

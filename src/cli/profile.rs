@@ -11,19 +11,33 @@ use crate::machine::{Machine, TOWER_NAMES};
 use crate::path::Vec3;
 
 #[derive(clap::Args, Debug)]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
 pub struct Args {
+    #[command(subcommand)]
+    pub action: Option<Action>,
     /// Machine profile (YAML).
-    #[arg(value_name = "M.yaml")]
-    pub profile: PathBuf,
+    #[arg(value_name = "M.yaml", required = true)]
+    pub profile: Option<PathBuf>,
     #[arg(long, value_enum, default_value_t = Format::Text)]
     pub format: Format,
+}
+
+#[derive(clap::Subcommand, Debug)]
+pub enum Action {
+    /// Write a machine profile from a Klipper delta configuration (printer.cfg).
+    ImportKlipper(super::import_klipper::Args),
 }
 
 /// Klipper's delta.py SLOW_RATIO: half speed beyond it, quarter speed beyond twice it.
 const SLOW_RATIO: f64 = 3.0;
 
 pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
-    let machine = Machine::load(&args.profile)?;
+    let profile = match (&args.action, &args.profile) {
+        (Some(Action::ImportKlipper(import)), _) => return super::import_klipper::run(import),
+        (None, Some(profile)) => profile,
+        (None, None) => anyhow::bail!("a machine profile (M.yaml) is required"),
+    };
+    let machine = Machine::load(profile)?;
     let model = DeltaModel::new(&machine);
     let g = &machine.geometry;
     let centre = model.static_forces_n(Vec3::zeros())?;
@@ -64,7 +78,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         Format::Text => {
             let l = &machine.limits;
             let e = &machine.extruder;
-            println!("{}: profile OK ({})", machine.name, args.profile.display());
+            println!("{}: profile OK ({})", machine.name, profile.display());
             println!(
                 "geometry: delta radius {:.3} mm, arms {:.3}/{:.3}/{:.3} mm, nozzle offset {:.3} mm",
                 g.delta_radius_mm,

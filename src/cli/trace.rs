@@ -9,7 +9,7 @@ use anyhow::Context;
 
 use super::common::MachineArg;
 use super::replace::replace_file;
-use crate::analysis::{TRACE_HEADER, run as run_pipeline};
+use crate::analysis::{RunOptions, TRACE_HEADER, run as run_pipeline};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -32,7 +32,10 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         run_pipeline(
             input,
             &machine,
-            true,
+            RunOptions {
+                trace: true,
+                window_s: None,
+            },
             |r| {
                 if failure.is_ok() {
                     failure = w.write_all(r.trace.as_bytes());

@@ -121,6 +121,25 @@ impl DeltaModel {
     pub fn home_carriages_mm(&self) -> [f64; 3] {
         self.top_mm
     }
+
+    /// Where each tower's arm pulls from, horizontally (the carriage joint line less the
+    /// platform joint offset), mm: the nozzle's horizontal distance from it sets the arm's tilt.
+    pub fn towers_xy_mm(&self) -> [[f64; 2]; 3] {
+        self.towers_mm
+    }
+
+    /// How many times faster than the nozzle a tower's carriage moves for a horizontal nozzle
+    /// motion away from the tower, with the platform `horizontal_mm` from it: h/√(l² − h²),
+    /// the cotangent of the arm's angle above the horizontal (from eq. 7 with ż = 0). Infinite
+    /// when the arm lies flat or cannot reach.
+    pub fn carriage_speed_ratio(&self, tower: usize, horizontal_mm: f64) -> f64 {
+        let rise2 = self.arm2_mm2[tower] - horizontal_mm * horizontal_mm;
+        if rise2 > 0.0 {
+            horizontal_mm / rise2.sqrt()
+        } else {
+            f64::INFINITY
+        }
+    }
 }
 
 #[cfg(test)]

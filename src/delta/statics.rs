@@ -141,7 +141,12 @@ mod tests {
                 "{ratio}: {:?}",
                 s.dq_mm_s
             );
+            // The same ratio in closed form, from the distance to tower C's pull point.
+            let c = m.towers_xy_mm()[2];
+            let h = (c[0] * c[0] + (c[1] + r).powi(2)).sqrt();
+            assert!((m.carriage_speed_ratio(2, h) - ratio).abs() < 1e-9);
         }
+        assert_eq!(m.carriage_speed_ratio(2, 214.5), f64::INFINITY);
         // Hand-computed: 3·√(214.5²/10) − 105.
         assert!((machine.slow_radius_mm(3.0) - 98.492_567).abs() < 1e-5);
     }

@@ -8,7 +8,7 @@ mod text;
 
 pub use annotations::{annotations, summary_lines};
 pub use github::write_github;
-pub use stats::{MoveStats, Problem};
+pub use stats::{MoveStats, NEAR_SINGULAR_RATIO, Problem};
 pub use text::write_text;
 
 use serde::Serialize;
@@ -41,6 +41,8 @@ pub struct Summary {
     pub peak_force_n: [f64; 3],
     /// Line of each tower's peak.
     pub peak_line: [u64; 3],
+    /// Time of each tower's peak, s.
+    pub peak_t_s: [f64; 3],
     /// Moves over the force limit, unreachable, above home or outside the print radius.
     pub violations: u64,
     pub unreachable: u64,
@@ -105,12 +107,25 @@ impl Report {
             if m.peak_force_n[i] > s.peak_force_n[i] {
                 s.peak_force_n[i] = m.peak_force_n[i];
                 s.peak_line[i] = m.line;
+                s.peak_t_s[i] = m.peak_t_s[i];
             }
         }
         if let Some(moves) = &mut self.moves {
             moves.push(MoveEntry {
                 line: m.line,
                 peak_force_n: m.peak_force_n,
+            });
+        }
+        if let Some((tower, ratio)) = m.near_singular {
+            let angle = (1.0 / ratio).atan().to_degrees();
+            self.add_diagnostic(&Diagnostic {
+                line: m.line,
+                column: 1,
+                severity: Severity::Warning,
+                message: format!(
+                    "near-singular pose: tower {} arm {angle:.1}° from flat, carriage up to {ratio:.1}× the nozzle speed",
+                    TOWERS[tower]
+                ),
             });
         }
         if let Some(v) = self.violation_of(m) {
@@ -168,6 +183,20 @@ impl Report {
                 worst,
                 m.peak_t_s[worst],
                 format!("OUTSIDE print radius: {radius_mm:.2} mm > {limit_mm:.2} mm"),
+            ),
+            Some(p @ Problem::BelowBed { z_mm }) => (
+                p.kind(),
+                worst,
+                m.peak_t_s[worst],
+                format!("BELOW the bed: z = {z_mm:.3} mm"),
+            ),
+            Some(p @ Problem::NotSampled { duration_s }) => (
+                p.kind(),
+                worst,
+                m.peak_t_s[worst],
+                format!(
+                    "NOT SAMPLED: the move lasts {duration_s:.0} s; only its ends were checked"
+                ),
             ),
             None if m.peak_n() > self.limit_force_n => (
                 "force",

@@ -23,8 +23,13 @@ pub enum Problem {
         tower: usize,
         over_mm: f64,
     },
+    /// The nozzle goes below the bed (Klipper's delta refuses z < 0).
+    BelowBed { z_mm: f64 },
     /// The nozzle leaves the print disc.
     OutsideRadius { radius_mm: f64, limit_mm: f64 },
+    /// The move lasts so long that sampling it would take hours (F near zero, a huge
+    /// coordinate, an arc of a million turns): only its ends were checked.
+    NotSampled { duration_s: f64 },
 }
 
 impl Problem {
@@ -33,16 +38,20 @@ impl Problem {
         match self {
             Problem::Unreachable { .. } => "unreachable",
             Problem::AboveHome { .. } => "above_home",
+            Problem::BelowBed { .. } => "below_bed",
             Problem::OutsideRadius { .. } => "outside_radius",
+            Problem::NotSampled { .. } => "not_sampled",
         }
     }
 
     /// Rank among the problems of one move: the higher one is reported.
     fn severity(&self) -> u8 {
         match self {
-            Problem::Unreachable { .. } => 2,
-            Problem::AboveHome { .. } => 1,
-            Problem::OutsideRadius { .. } => 0,
+            Problem::Unreachable { .. } => 4,
+            Problem::AboveHome { .. } => 3,
+            Problem::BelowBed { .. } => 2,
+            Problem::OutsideRadius { .. } => 1,
+            Problem::NotSampled { .. } => 0,
         }
     }
 }
@@ -60,9 +69,16 @@ pub struct MoveStats {
     pub peak_phase: [Phase; 3],
     /// Largest |dE/dt − Σ Q_i q̇_i| over the move (eq. 20), W.
     pub max_energy_residual_w: f64,
-    /// The first geometric problem found, if any.
+    /// The most severe geometric problem found, if any.
     pub problem: Option<Problem>,
+    /// Near a singular pose: the tower (0 = A) whose carriage moves fastest relative to the
+    /// nozzle, and that speed ratio, when it exceeds [`NEAR_SINGULAR_RATIO`].
+    pub near_singular: Option<(usize, f64)>,
 }
+
+/// A carriage moving this many times faster than the nozzle marks a near-singular pose (the
+/// arm within 4.8° of flat): Klipper's delta refuses moves beyond it (4 × its SLOW_RATIO).
+pub const NEAR_SINGULAR_RATIO: f64 = 12.0;
 
 impl MoveStats {
     pub fn new(line: u64) -> Self {
@@ -74,6 +90,7 @@ impl MoveStats {
             peak_phase: [Phase::Cruise; 3],
             max_energy_residual_w: 0.0,
             problem: None,
+            near_singular: None,
         }
     }
 

@@ -1,0 +1,96 @@
+//! Planner moves/s, model samples/s (one `evaluate`), and resample + model samples/s, on
+//! the shipped Cura calibration cube and the Kossel profile.
+
+use std::hint::black_box;
+use std::path::Path;
+
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use delta_gcode::delta::DeltaModel;
+use delta_gcode::gcode::{Event, interpret};
+use delta_gcode::machine::Machine;
+use delta_gcode::path::Vec3;
+use delta_gcode::planner::{PlannedMove, Planner};
+use delta_gcode::resample::sample_move;
+
+fn repo(p: &str) -> String {
+    format!("{}/{p}", env!("CARGO_MANIFEST_DIR"))
+}
+
+fn setup() -> (Machine, Vec<Event>) {
+    let machine = Machine::load(Path::new(&repo("machines/kossel.yaml"))).expect("profile");
+    let data = std::fs::read(repo("samples/calib-cube_cura413_kossel-mini.gcode")).expect("sample");
+    let mut events = Vec::new();
+    let home = Vec3::new(0.0, 0.0, machine.geometry.home_z_mm);
+    interpret(&data[..], home, |e| events.push(e), |_| {}).expect("read");
+    (machine, events)
+}
+
+fn plan(machine: &Machine, events: &[Event]) -> Vec<PlannedMove> {
+    let mut planner = Planner::new(machine);
+    let mut out = Vec::new();
+    for e in events {
+        planner.push(*e, &mut out);
+    }
+    planner.finish(&mut out);
+    out
+}
+
+fn bench(c: &mut Criterion) {
+    let (machine, events) = setup();
+    let moves = plan(&machine, &events);
+    let model = DeltaModel::new(&machine);
+    let period = machine.sampling.period_s;
+
+    let mut g = c.benchmark_group("planner");
+    g.throughput(Throughput::Elements(moves.len() as u64));
+    g.bench_function("plan_cube", |b| {
+        b.iter(|| black_box(plan(&machine, &events).len()))
+    });
+    g.finish();
+
+    // One model evaluation: a nozzle state in the print volume, accelerating.
+    let mut g = c.benchmark_group("model");
+    g.throughput(Throughput::Elements(1));
+    let (p, v, a) = (
+        Vec3::new(30.0, -20.0, 5.0),
+        Vec3::new(120.0, 80.0, 0.0),
+        Vec3::new(2000.0, -1500.0, 0.0),
+    );
+    g.bench_function("evaluate", |b| {
+        b.iter(|| black_box(model.evaluate(black_box(p), black_box(v), black_box(a))))
+    });
+    g.finish();
+
+    // Resampling and the model over every planned move of the cube, on one thread.
+    let mut samples = 0u64;
+    for i in 0..moves.len() {
+        sample_move(
+            i.checked_sub(1).map(|j| &moves[j]),
+            &moves[i],
+            moves.get(i + 1),
+            period,
+            &mut |_| samples += 1,
+        );
+    }
+    let mut g = c.benchmark_group("resample_and_model");
+    g.throughput(Throughput::Elements(samples));
+    g.sample_size(10);
+    g.bench_function("cube", |b| {
+        b.iter(|| {
+            let mut peak = 0.0_f64;
+            for i in 0..moves.len() {
+                let (prev, next) = (i.checked_sub(1).map(|j| &moves[j]), moves.get(i + 1));
+                sample_move(prev, &moves[i], next, period, &mut |s| {
+                    if let Ok(st) = model.evaluate(s.pos_mm, s.vel_mm_s, s.acc_mm_s2) {
+                        peak = peak.max(st.force_n[0].abs());
+                    }
+                });
+            }
+            black_box(peak)
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -1,0 +1,44 @@
+//! The parallel model stage gives exactly what one thread gives: the same report and the
+//! same trace, byte for byte, whatever the number of rayon threads.
+
+mod common;
+
+use common::*;
+
+fn run_with_threads(threads: &str, args: &[&str]) -> Vec<u8> {
+    let o = bin()
+        .args(args)
+        .env("RAYON_NUM_THREADS", threads)
+        .output()
+        .expect("runs");
+    assert!(o.status.code().is_some_and(|c| c < 2), "{}", stderr(&o));
+    o.stdout
+}
+
+#[test]
+fn reports_and_traces_do_not_depend_on_the_thread_count() {
+    let cube = repo("samples/calib-cube_cura413_kossel-mini.gcode")
+        .display()
+        .to_string();
+    let over = repo("samples/over-limit.gcode").display().to_string();
+    let machine = repo("machines/kossel.yaml").display().to_string();
+    // The cube's 8716 moves span several batches of the model stage.
+    let check = [
+        "check",
+        &cube,
+        &over,
+        "-m",
+        &machine,
+        "--format",
+        "json",
+        "--all-moves",
+        "-q",
+    ];
+    let one = run_with_threads("1", &check);
+    assert!(one.len() > 100_000, "{} bytes", one.len());
+    assert_eq!(one, run_with_threads("4", &check));
+    let trace = ["trace", &cube, "-m", &machine, "-o", "-"];
+    let one = run_with_threads("1", &trace);
+    assert!(one.len() > 1_000_000, "{} bytes", one.len());
+    assert_eq!(one, run_with_threads("4", &trace));
+}
