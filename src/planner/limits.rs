@@ -128,7 +128,8 @@ impl MoveLimits {
             // An extrude-only move: the extruder's limits below cap it.
             (m.e_mm.abs(), speed, EXTRUDE_ONLY_ACCEL_MM_S2)
         };
-        if move_d == 0.0 || !move_d.is_finite() {
+        // Also below a nanometre: nothing to plan, and squares of such lengths underflow.
+        if move_d < MIN_KINEMATIC_D_MM || !move_d.is_finite() {
             return None;
         }
         let mut q = QueuedMove::new(
