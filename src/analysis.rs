@@ -14,11 +14,11 @@ use indicatif::ProgressBar;
 use rayon::prelude::*;
 
 use crate::delta::{DeltaModel, Unreachable};
-use crate::gcode::{self, Diagnostic, Event, ReadStats};
+use crate::gcode::{self, Diagnostic, Event, ReadStats, Severity};
 use crate::machine::Machine;
 use crate::path::Vec3;
 use crate::planner::{PlannedMove, Planner};
-use crate::report::{MoveStats, NEAR_SINGULAR_RATIO, Problem, Report};
+use crate::report::{MAX_LISTED, MoveStats, NEAR_SINGULAR_RATIO, Problem, Report};
 use crate::resample::sample_move;
 
 /// Planned moves handed to the parallel stage at a time.
@@ -323,7 +323,10 @@ pub fn check_file(
     let file = File::open(path).with_context(|| format!("cannot open {}", path.display()))?;
     let name = path.display().to_string();
     let mut report = Report::new(&name, &machine.name, machine.motors.max_force_n, all_moves);
+    // The reader's diagnostics: the first MAX_LISTED kept, the others only counted, so a file
+    // with a warning on every line does not fill the memory.
     let mut diags = Vec::new();
+    let (mut unlisted_warnings, mut unlisted_errors) = (0, 0);
     let input = ProgressReader {
         inner: file,
         bar: progress,
@@ -333,12 +336,18 @@ pub fn check_file(
         machine,
         RunOptions::default(),
         |r| report.add_move(&r.stats),
-        |d| diags.push(d),
+        |d| match d.severity {
+            _ if diags.len() < MAX_LISTED => diags.push(d),
+            Severity::Warning => unlisted_warnings += 1,
+            Severity::Error => unlisted_errors += 1,
+        },
     )
     .with_context(|| format!("cannot read {name}"))?;
     for d in &diags {
         report.add_diagnostic(d);
     }
+    report.summary.warnings += unlisted_warnings;
+    report.summary.errors += unlisted_errors;
     report.summary.lines = totals.read.lines;
     report.summary.print_time_s = totals.print_time_s;
     let lines = report.violation_lines();
