@@ -61,8 +61,8 @@ impl MoveLimits {
     pub(super) fn new(machine: &Machine) -> Self {
         let l = &machine.limits;
         let edge_xy2_mm2 = l.edge_slowdown.then(|| {
-            let slow = slow_radius_mm(machine, SLOW_RATIO);
-            let very_slow = slow_radius_mm(machine, 2.0 * SLOW_RATIO);
+            let slow = machine.slow_radius_mm(SLOW_RATIO);
+            let very_slow = machine.slow_radius_mm(2.0 * SLOW_RATIO);
             (slow * slow, very_slow * very_slow)
         });
         MoveLimits {
@@ -222,20 +222,6 @@ fn valid_path(p: &Path) -> bool {
     }
 }
 
-/// Radius (mm) beyond which a carriage of the delta can move `ratio` times faster than the
-/// nozzle: delta.py `ratio_to_xy` with a zero step distance, ratio·l/√(ratio² + 1) − R, for
-/// the shortest arm l and delta radius R. (Squared as delta.py squares it.)
-// TODO(lead): replace with the shared `Machine::slow_radius_mm`.
-fn slow_radius_mm(machine: &Machine, ratio: f64) -> f64 {
-    let g = &machine.geometry;
-    let min_arm = g
-        .arm_length_mm
-        .iter()
-        .copied()
-        .fold(f64::INFINITY, f64::min);
-    ratio * min_arm / (ratio * ratio + 1.0).sqrt() - g.delta_radius_mm
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -246,8 +232,8 @@ mod tests {
         // l = 215, R = 105: 3·215/√10 − 105 = 645/3.16227766 − 105 = 98.9669;
         // 6·215/√37 − 105 = 1290/6.08276253 − 105 = 107.0747.
         let m = machine();
-        assert!((slow_radius_mm(&m, 3.0) - 98.9669).abs() < 1e-4);
-        assert!((slow_radius_mm(&m, 6.0) - 107.0747).abs() < 1e-4);
+        assert!((m.slow_radius_mm(3.0) - 98.9669).abs() < 1e-4);
+        assert!((m.slow_radius_mm(6.0) - 107.0747).abs() < 1e-4);
     }
 
     #[test]
