@@ -125,8 +125,9 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
                 e.instantaneous_corner_velocity_mm_s
             );
             println!(
-                "motor limit: {limit} N per carriage ({:.0} % used by the worst static pose); sampling {} s; g = {} m/s²",
+                "motor limit: {limit:.2} N per carriage ({:.0} % used by the worst static pose); rotor mass seen at the belt {:.4} kg; sampling {} s; g = {} m/s²",
                 100.0 * max_static / limit,
+                machine.motors.reflected_mass_kg,
                 machine.sampling.period_s,
                 machine.gravity_m_s2
             );
