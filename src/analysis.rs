@@ -21,6 +21,9 @@ use crate::planner::{PlannedMove, Planner};
 use crate::report::{MAX_LISTED, MoveStats, NEAR_SINGULAR_RATIO, Problem, Report};
 use crate::resample::sample_move;
 
+/// The progress bar's move count is updated this often.
+const PROGRESS_EVERY_MOVES: u64 = 4096;
+
 /// Planned moves handed to the parallel stage at a time.
 const BATCH: usize = 4096;
 
@@ -335,7 +338,14 @@ pub fn check_file(
         BufReader::with_capacity(1 << 16, input),
         machine,
         RunOptions::default(),
-        |r| report.add_move(&r.stats),
+        |r| {
+            report.add_move(&r.stats);
+            if let Some(bar) = progress
+                && report.summary.moves % PROGRESS_EVERY_MOVES == 0
+            {
+                bar.set_message(format!("{} moves", report.summary.moves));
+            }
+        },
         |d| match d.severity {
             _ if diags.len() < MAX_LISTED => diags.push(d),
             Severity::Warning => unlisted_warnings += 1,

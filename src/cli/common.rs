@@ -50,7 +50,7 @@ impl Progress {
             return None;
         }
         let style = ProgressStyle::with_template(
-            "{prefix} [{bar:30}] {bytes}/{total_bytes} {bytes_per_sec} ETA {eta}",
+            "{prefix} [{bar:30}] {bytes}/{total_bytes} {bytes_per_sec}, {msg} ETA {eta}",
         )
         .ok()?
         .progress_chars("=> ");
