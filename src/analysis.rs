@@ -341,7 +341,7 @@ pub fn check_file(
         |r| {
             report.add_move(&r.stats);
             if let Some(bar) = progress
-                && report.summary.moves % PROGRESS_EVERY_MOVES == 0
+                && report.summary.moves.is_multiple_of(PROGRESS_EVERY_MOVES)
             {
                 bar.set_message(format!("{} moves", report.summary.moves));
             }
