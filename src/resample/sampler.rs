@@ -14,9 +14,9 @@
 //! The next move's junction sample is the right limit at the same instant. A move whose
 //! span is empty (t_end ≤ t0) emits only its junction sample.
 
-use super::curve::{motion_on, taylor_step};
+use super::curve::{Curve, motion_on, taylor_step};
 use super::{Phase, Sample};
-use crate::path::Vec3;
+use crate::path::{Path, Vec3};
 use crate::planner::PlannedMove;
 
 /// Samples of `mv` (see the module doc for which samples a move owns), in time order.
@@ -122,10 +122,54 @@ fn first_grid_index(t: f64, period_s: f64) -> i64 {
     k
 }
 
+/// A straight path as its own curve type, so that the sampling loop of a line is compiled
+/// for lines: p' is then a loop constant and p'' zero, and the compiler hoists |p'| out of the
+/// Taylor step. The same stepping law as every other curve.
+struct Line {
+    start: Vec3,
+    delta: Vec3,
+}
+
+impl Curve for Line {
+    #[inline(always)]
+    fn point(&self, u: f64) -> Vec3 {
+        self.start + self.delta * u
+    }
+    #[inline(always)]
+    fn d1(&self, _u: f64) -> Vec3 {
+        self.delta
+    }
+    #[inline(always)]
+    fn d2(&self, _u: f64) -> Vec3 {
+        Vec3::zeros()
+    }
+}
+
 /// The common body: emits the move's samples over [t0, t_end] with the given junction
-/// impulse (acceleration to add at time t).
+/// impulse (acceleration to add at time t), dispatching once on the kind of path.
 fn sample_span(
     mv: &PlannedMove,
+    t_end: f64,
+    period_s: f64,
+    impulse: impl Fn(f64) -> Vec3,
+    out: &mut impl FnMut(Sample),
+) {
+    match mv.path {
+        Path::Line { start, end } => {
+            let line = Line {
+                start,
+                delta: end - start,
+            };
+            sample_curve(mv, &line, t_end, period_s, impulse, out)
+        }
+        Path::Arc(_) => sample_curve(mv, &mv.path, t_end, period_s, impulse, out),
+    }
+}
+
+/// Samples of `mv` along `curve` (its path).
+fn sample_curve<C: Curve>(
+    mv: &PlannedMove,
+    curve: &C,
     t_end: f64,
     period_s: f64,
     impulse: impl Fn(f64) -> Vec3,
@@ -190,9 +234,9 @@ fn sample_span(
     let mut emit = |t: f64, law: &PhaseLaw, u: f64| {
         let v = law.speed(t);
         let (pos, vel, acc) = if mv.kinematic {
-            motion_on(&mv.path, u, v, law.a_mm_s2)
+            motion_on(curve, u, v, law.a_mm_s2)
         } else {
-            (mv.path.start(), Vec3::zeros(), Vec3::zeros())
+            (curve.point(0.0), Vec3::zeros(), Vec3::zeros())
         };
         let kick = impulse(t);
         let phase = if kick.norm_squared() <= CORNER_MIN_MM_S2 * CORNER_MIN_MM_S2 {
@@ -211,7 +255,7 @@ fn sample_span(
     };
     let mut step = |t: f64, law: &PhaseLaw, u: &mut f64| {
         if mv.kinematic {
-            *u = taylor_step(&mv.path, *u, law.speed(t_prev), law.a_mm_s2, t - t_prev);
+            *u = taylor_step(curve, *u, law.speed(t_prev), law.a_mm_s2, t - t_prev);
         }
         t_prev = t;
     };
