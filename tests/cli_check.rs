@@ -260,22 +260,27 @@ fn slicer_hook_as_prusaslicer_runs_it() {
     assert!(String::from_utf8_lossy(&annotated).contains("; delta-gcode: OVER force"));
 }
 
-#[test]
-fn lissajous_at_low_speed_sums_to_the_suspended_weight() {
-    // The paper's Fig. 4 (bottom): at 10 mm/s ΣQ_i is the weight of the suspended masses,
-    // (6·0.02 + 0.5 + 3·0.25) kg · 9.81 m/s² = 13.44 N (eq. 17).
+/// The trace of a sample on machines/paper.yaml: its header and rows.
+fn paper_trace(sample: &str) -> (Vec<String>, Vec<Vec<f64>>) {
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("t.csv");
     let o = run(&[
         "trace",
-        &path("samples/lissajous_10.gcode"),
+        &path(sample),
         "-m",
         &path(PAPER),
         "-o",
         &csv.display().to_string(),
     ]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let (header, rows) = read_trace(&fs::read_to_string(&csv).unwrap());
+    read_trace(&fs::read_to_string(&csv).unwrap())
+}
+
+#[test]
+fn lissajous_at_low_speed_sums_to_the_suspended_weight() {
+    // The paper's Fig. 4 (bottom): at 10 mm/s ΣQ_i is the weight of the suspended masses,
+    // (6·0.02 + 0.5 + 3·0.25) kg · 9.81 m/s² = 13.44 N (eq. 17).
+    let (header, rows) = paper_trace("samples/lissajous_10.gcode");
     let col = |name: &str| header.iter().position(|h| h == name).expect(name);
     let (f1, f2, f3, line, t) = (
         col("f1_n"),
@@ -311,18 +316,7 @@ fn trace_power_equals_the_energy_rate() {
     // eq. 20, the paper's Fig. 5, checked against the energy computed here from the trace's
     // own columns and differentiated numerically: K = ½ m_c Σ q̇² + ½ m_p |v|²,
     // U = g (m_c Σ q + m_p z_P), with the paper's masses (paper.yaml).
-    let dir = tempfile::tempdir().unwrap();
-    let csv = dir.path().join("t.csv");
-    let o = run(&[
-        "trace",
-        &path("samples/lissajous_200.gcode"),
-        "-m",
-        &path(PAPER),
-        "-o",
-        &csv.display().to_string(),
-    ]);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let (header, rows) = read_trace(&fs::read_to_string(&csv).unwrap());
+    let (header, rows) = paper_trace("samples/lissajous_200.gcode");
     let col = |name: &str| header.iter().position(|h| h == name).expect(name);
     let (m_c, m_p, g) = (0.25 + 0.02, 0.5 + 3.0 * 0.02, 9.81);
     let energy = |r: &Vec<f64>| {

@@ -2,7 +2,8 @@
 
 use std::collections::BTreeMap;
 
-use super::{Report, TOWERS, Violation, format_forces};
+use super::{Report, Violation, format_forces};
+use crate::machine::TOWER_NAMES;
 
 /// Where and when a violation happened: `(tower A, decel, t=812.304 s)`.
 pub(super) fn context(v: &Violation) -> String {
@@ -10,7 +11,11 @@ pub(super) fn context(v: &Violation) -> String {
         .ok()
         .and_then(|p| p.as_str().map(str::to_string))
         .unwrap_or_default();
-    format!("(tower {}, {phase}, t={:.3} s)", TOWERS[v.tower - 1], v.t_s)
+    format!(
+        "(tower {}, {phase}, t={:.3} s)",
+        TOWER_NAMES[v.tower - 1],
+        v.t_s
+    )
 }
 
 /// The annotation lines to insert after each flagged input line.

@@ -14,6 +14,7 @@ pub use text::write_text;
 use serde::Serialize;
 
 use crate::gcode::{Diagnostic, Severity};
+use crate::machine::TOWER_NAMES;
 use crate::resample::Phase;
 
 /// At most this many violations and diagnostics are kept in detail; all are counted.
@@ -81,9 +82,6 @@ pub struct DiagnosticEntry {
     pub message: String,
 }
 
-/// Tower letters, A B C, for 0-based tower indices.
-pub const TOWERS: [char; 3] = ['A', 'B', 'C'];
-
 impl Report {
     pub fn new(file: &str, machine: &str, limit_force_n: f64, all_moves: bool) -> Self {
         Report {
@@ -124,7 +122,7 @@ impl Report {
                 severity: Severity::Warning,
                 message: format!(
                     "near-singular pose: tower {} arm {angle:.1}° from flat, carriage up to {ratio:.1}× the nozzle speed",
-                    TOWERS[tower]
+                    TOWER_NAMES[tower]
                 ),
             });
         }
@@ -170,7 +168,7 @@ impl Report {
                 *t_s,
                 format!(
                     "ABOVE HOME tower {}: carriage {over_mm:.3} mm above its homed height",
-                    TOWERS[*tower]
+                    TOWER_NAMES[*tower]
                 ),
             ),
             Some(

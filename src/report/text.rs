@@ -2,7 +2,8 @@
 
 use std::io::{self, Write};
 
-use super::{Report, TOWERS, format_forces};
+use super::{Report, format_forces};
+use crate::machine::TOWER_NAMES;
 
 /// How many of the worst moves the text report lists.
 const WORST_SHOWN: usize = 10;
@@ -53,7 +54,11 @@ pub fn write_text(out: &mut (impl Write + ?Sized), report: &Report) -> io::Resul
                 let peak = v.peak_force_n[v.tower - 1];
                 (
                     format!("{:+.1} N", limit - peak),
-                    format!("tower {}: {}", TOWERS[v.tower - 1], v.command.trim_end()),
+                    format!(
+                        "tower {}: {}",
+                        TOWER_NAMES[v.tower - 1],
+                        v.command.trim_end()
+                    ),
                 )
             } else {
                 (
