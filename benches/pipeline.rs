@@ -1,11 +1,13 @@
-//! Planner moves/s, model samples/s (one `evaluate`), and resample + model samples/s, on
+//! Planner moves/s, model samples/s (one `evaluate`; a block of states through the
+//! vectorised forces), and resample + model + statistics samples/s (`check`'s per-move code), on
 //! the shipped Cura calibration cube and the Kossel profile.
 
 use std::hint::black_box;
 use std::path::Path;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use delta_gcode::delta::DeltaModel;
+use delta_gcode::analysis::{MoveChecker, RunOptions, Scratch};
+use delta_gcode::delta::{BLOCK, DeltaModel, ForceBlock, StateBlock};
 use delta_gcode::gcode::{Event, interpret};
 use delta_gcode::machine::Machine;
 use delta_gcode::path::Vec3;
@@ -59,9 +61,29 @@ fn bench(c: &mut Criterion) {
     g.bench_function("evaluate", |b| {
         b.iter(|| black_box(model.evaluate(black_box(p), black_box(v), black_box(a))))
     });
+
+    // The vectorised forces over a full block of states (what `check` runs), per state.
+    let mut states = StateBlock::default();
+    for j in 0..BLOCK {
+        let s = j as f64 / BLOCK as f64;
+        for k in 0..3 {
+            states.pos_mm[k][j] = p[k] * (1.0 - s);
+            states.vel_mm_s[k][j] = v[k] * s;
+            states.acc_mm_s2[k][j] = a[k] * (0.5 - s);
+        }
+    }
+    let mut forces = ForceBlock::default();
+    g.throughput(Throughput::Elements(BLOCK as u64));
+    g.bench_function("forces_block", |b| {
+        b.iter(|| {
+            model.forces_block(black_box(&states), BLOCK, &mut forces);
+            black_box(forces.force_n[0][0])
+        })
+    });
     g.finish();
 
-    // Resampling and the model over every planned move of the cube, on one thread.
+    // Resampling, the model and the statistics over every planned move of the cube, on one
+    // thread: `check`'s own per-move code.
     let mut samples = 0u64;
     for i in 0..moves.len() {
         sample_move(
@@ -72,20 +94,19 @@ fn bench(c: &mut Criterion) {
             &mut |_| samples += 1,
         );
     }
+    let checker = MoveChecker::new(&machine, RunOptions::default());
+    let mut scratch = Box::<Scratch>::default();
     let mut g = c.benchmark_group("resample_and_model");
     g.throughput(Throughput::Elements(samples));
     g.sample_size(10);
     g.bench_function("cube", |b| {
         b.iter(|| {
-            let mut peak = 0.0_f64;
-            for i in 0..moves.len() {
-                let (prev, next) = (i.checked_sub(1).map(|j| &moves[j]), moves.get(i + 1));
-                sample_move(prev, &moves[i], next, period, &mut |s| {
-                    if let Ok(st) = model.evaluate(s.pos_mm, s.vel_mm_s, s.acc_mm_s2) {
-                        peak = peak.max(st.force_n[0].abs());
-                    }
-                });
-            }
+            let mut out = Vec::with_capacity(moves.len());
+            checker.check_run(&mut scratch, None, &moves, None, &mut out);
+            let peak = out
+                .iter()
+                .map(|r| r.stats.peak_force_n[0])
+                .fold(0.0, f64::max);
             black_box(peak)
         })
     });

@@ -27,6 +27,14 @@ pub struct Arc {
     pub z_delta_mm: f64,
 }
 
+/// A curve's position p(u) and its derivatives dp/du, d²p/du² at one parameter (mm).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Jet {
+    pub p: Vec3,
+    pub d1: Vec3,
+    pub d2: Vec3,
+}
+
 /// The geometry of one segment.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Path {
@@ -40,46 +48,52 @@ impl Path {
         Path::Line { start, end }
     }
 
-    /// Position at parameter u ∈ [0, 1].
+    /// Position and first two derivatives at parameter u ∈ [0, 1], together: an arc's
+    /// angle, sine and cosine are computed once for all three.
     #[inline(always)]
-    pub fn point(&self, u: f64) -> Vec3 {
+    pub fn jet(&self, u: f64) -> Jet {
         match self {
-            Path::Line { start, end } => start + (end - start) * u,
+            Path::Line { start, end } => {
+                let d1 = end - start;
+                Jet {
+                    p: start + d1 * u,
+                    d1,
+                    d2: Vec3::zeros(),
+                }
+            }
             Path::Arc(a) => {
                 let th = a.start_angle_rad + a.sweep_rad * u;
-                Vec3::new(
-                    a.center_mm[0] + a.radius_mm * th.cos(),
-                    a.center_mm[1] + a.radius_mm * th.sin(),
-                    a.z_start_mm + a.z_delta_mm * u,
-                )
+                let (sin, cos) = th.sin_cos();
+                let (r, w) = (a.radius_mm, a.sweep_rad);
+                Jet {
+                    p: Vec3::new(
+                        a.center_mm[0] + r * cos,
+                        a.center_mm[1] + r * sin,
+                        a.z_start_mm + a.z_delta_mm * u,
+                    ),
+                    d1: Vec3::new(-w * r * sin, w * r * cos, a.z_delta_mm),
+                    d2: Vec3::new(-w * w * r * cos, -w * w * r * sin, 0.0),
+                }
             }
         }
     }
 
-    /// First derivative dp/du.
+    /// Position at parameter u ∈ [0, 1].
+    #[inline(always)]
+    pub fn point(&self, u: f64) -> Vec3 {
+        self.jet(u).p
+    }
+
+    /// First derivative dp/du (its norm is the path length for both kinds).
     #[inline(always)]
     pub fn d1(&self, u: f64) -> Vec3 {
-        match self {
-            Path::Line { start, end } => end - start,
-            Path::Arc(a) => {
-                let th = a.start_angle_rad + a.sweep_rad * u;
-                let w = a.sweep_rad * a.radius_mm;
-                Vec3::new(-w * th.sin(), w * th.cos(), a.z_delta_mm)
-            }
-        }
+        self.jet(u).d1
     }
 
     /// Second derivative d²p/du².
     #[inline(always)]
     pub fn d2(&self, u: f64) -> Vec3 {
-        match self {
-            Path::Line { .. } => Vec3::zeros(),
-            Path::Arc(a) => {
-                let th = a.start_angle_rad + a.sweep_rad * u;
-                let w2 = a.sweep_rad * a.sweep_rad * a.radius_mm;
-                Vec3::new(-w2 * th.cos(), -w2 * th.sin(), 0.0)
-            }
-        }
+        self.jet(u).d2
     }
 
     pub fn start(&self) -> Vec3 {

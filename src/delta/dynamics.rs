@@ -3,7 +3,7 @@
 
 use serde::Serialize;
 
-use super::kinematics::{cofactors, dot};
+use super::kinematics::{MIN_RADICAND_MM2, TOP_TOLERANCE_MM, cofactors, dot};
 use super::{DeltaModel, Unreachable};
 use crate::path::Vec3;
 
@@ -35,36 +35,57 @@ pub struct DynState {
     pub jx_condition: f64,
 }
 
+/// The forces and the energy balance at one nozzle state, computed without a branch so
+/// that a block of states vectorises. When `ok` is false (the pose is unreachable, Jx is
+/// singular or an input is not finite) the other fields are meaningless, though never used.
+#[derive(Clone, Copy)]
+struct Core {
+    ok: bool,
+    q: [f64; 3],
+    dq: [f64; 3],
+    ddq: [f64; 3],
+    force: [f64; 3],
+    /// Jx⁻ᵀ (p̈ + g e_z), 1/mm · m/s².
+    w: [f64; 3],
+    cof: [[f64; 3]; 3],
+    inv_det: f64,
+    power_w: f64,
+    energy_rate_w: f64,
+}
+
 impl DeltaModel {
-    /// The full model at a nozzle position, velocity and acceleration (mm, mm/s, mm/s²).
-    /// Inlined, so that a caller that reads only the forces pays only for them.
-    /// Closed forms throughout: Jq is diagonal, and Jx⁻ᵀ comes from the cross products of
-    /// Jx's rows (the arm vectors), so nothing is factorised or allocated.
+    /// Everything the check needs (eq. 6-8, 14, 20) at a nozzle position, velocity and
+    /// acceleration (mm, mm/s, mm/s²), branch-free. Closed forms throughout: Jq is diagonal,
+    /// and Jx⁻ᵀ comes from the cross products of Jx's rows (the arm vectors), so nothing is
+    /// factorised or allocated.
     #[inline(always)]
-    pub fn evaluate(
-        &self,
-        pos_mm: Vec3,
-        vel_mm_s: Vec3,
-        acc_mm_s2: Vec3,
-    ) -> Result<DynState, Unreachable> {
-        let q = self.inverse(pos_mm)?;
-        let p = self.platform_mm(pos_mm);
-        let v = [vel_mm_s.x, vel_mm_s.y, vel_mm_s.z];
-        let a = [acc_mm_s2.x, acc_mm_s2.y, acc_mm_s2.z];
-        // A NaN or infinity anywhere makes the sum non-finite (so does a sum beyond 1e308,
-        // which no printer asks for): one test instead of six.
-        if !(v[0] + v[1] + v[2] + a[0] + a[1] + a[2]).is_finite() {
-            return Err(Unreachable::NotFinite);
-        }
+    fn core(&self, pos_mm: [f64; 3], v: [f64; 3], a: [f64; 3]) -> Core {
+        let p = [pos_mm[0], pos_mm[1], pos_mm[2] + self.nozzle_offset_mm];
+        let radicand = self.radicands(p);
+        // Clamped so that an unreachable lane computes finite garbage, flagged by `ok`.
+        let q = [
+            p[2] + radicand[0].max(MIN_RADICAND_MM2).sqrt(),
+            p[2] + radicand[1].max(MIN_RADICAND_MM2).sqrt(),
+            p[2] + radicand[2].max(MIN_RADICAND_MM2).sqrt(),
+        ];
         let rows = self.jx_rows(p, q);
         let (cof, det) = cofactors(&rows);
-        if det.abs() <= self.singular_det_mm3 {
-            return Err(Unreachable::Singular);
-        }
+        // A NaN or infinity anywhere makes the sum non-finite (so does a sum beyond 1e308,
+        // which no printer asks for): one test instead of nine. `&`, not `&&`: no branch.
+        let ok = (p[0] + p[1] + p[2] + v[0] + v[1] + v[2] + a[0] + a[1] + a[2]).is_finite()
+            & (radicand[0] >= MIN_RADICAND_MM2)
+            & (radicand[1] >= MIN_RADICAND_MM2)
+            & (radicand[2] >= MIN_RADICAND_MM2)
+            & (q[0] - self.top_mm[0] <= TOP_TOLERANCE_MM)
+            & (q[1] - self.top_mm[1] <= TOP_TOLERANCE_MM)
+            & (q[2] - self.top_mm[2] <= TOP_TOLERANCE_MM)
+            & (det.abs() > self.singular_det_mm3);
         let g = self.gravity_m_s2;
         // Jx⁻ᵀ (p̈ + g e_z), in 1/mm · m/s² (eq. 13-14).
         let b = [a[0] * MM, a[1] * MM, a[2] * MM + g];
+        let jq = [rows[0][2], rows[1][2], rows[2][2]]; // q_i − z_P > 0
         let inv_det = 1.0 / det;
+        let inv_jq = [1.0 / jq[0], 1.0 / jq[1], 1.0 / jq[2]];
         let w = [
             dot(cof[0], b) * inv_det,
             dot(cof[1], b) * inv_det,
@@ -73,51 +94,191 @@ impl DeltaModel {
         let mut dq = [0.0; 3];
         let mut ddq = [0.0; 3];
         let mut force = [0.0; 3];
-        let mut lambda = [0.0; 3];
         for i in 0..3 {
-            let jq = rows[i][2]; // q_i − z_P > 0
-            let inv_jq = 1.0 / jq;
             // eq. 7: q̇_i = (Jx ṗ)_i / Jq_ii.
-            dq[i] = dot(rows[i], v) * inv_jq;
+            dq[i] = dot(rows[i], v) * inv_jq[i];
             // eq. 8: q̈_i = ((Jx p̈)_i − (ẋ² + ẏ² + (ż − q̇_i)²)) / Jq_ii.
             let dz = v[2] - dq[i];
-            ddq[i] = (dot(rows[i], a) - (v[0] * v[0] + v[1] * v[1] + dz * dz)) * inv_jq;
+            ddq[i] = (dot(rows[i], a) - (v[0] * v[0] + v[1] * v[1] + dz * dz)) * inv_jq[i];
             // eq. 14 (Jq Jx⁻ᵀ is dimensionless: mm · 1/mm).
             // The carriage's inertia and weight differ by the reflected rotor mass.
             force[i] = self.carriage_inertia_kg * ddq[i] * MM
                 + self.carriage_weight_kg * g
-                + self.platform_kg * jq * w[i];
-            // eq. 13, Jx in m: Jx⁻ᵀ in 1/m = 1000 × its value in 1/mm.
-            lambda[i] = 0.5 * self.platform_kg * w[i] / MM;
+                + self.platform_kg * jq[i] * w[i];
         }
-        // K with the carriages' inertia, U with their weight (the rotor adds only to K).
         let (mi, mw, mp) = (
             self.carriage_inertia_kg,
             self.carriage_weight_kg,
             self.platform_kg,
         );
-        let ones = [1.0; 3];
-        let kinetic_j = 0.5 * (mi * dot(dq, dq) + mp * dot(v, v)) * MM * MM;
-        let potential_j = g * (mw * dot(q, ones) + mp * p[2]) * MM;
         let power_w = dot(force, dq) * MM;
-        // eq. 20, left side: d/dt of the two lines above.
+        // eq. 20, left side: d/dt of K and U (see `evaluate`).
         let energy_rate_w = (mi * dot(dq, ddq) + mp * dot(v, a)) * MM * MM
-            + g * (mw * dot(dq, ones) + mp * v[2]) * MM;
+            + g * (mw * (dq[0] + dq[1] + dq[2]) + mp * v[2]) * MM;
+        Core {
+            ok,
+            q,
+            dq,
+            ddq,
+            force,
+            w,
+            cof,
+            inv_det,
+            power_w,
+            energy_rate_w,
+        }
+    }
+
+    /// The full model at a nozzle position, velocity and acceleration (mm, mm/s, mm/s²).
+    /// Inlined, so that a caller that reads only some outputs pays only for them.
+    #[inline(always)]
+    pub fn evaluate(
+        &self,
+        pos_mm: Vec3,
+        vel_mm_s: Vec3,
+        acc_mm_s2: Vec3,
+    ) -> Result<DynState, Unreachable> {
+        let v = [vel_mm_s.x, vel_mm_s.y, vel_mm_s.z];
+        let a = [acc_mm_s2.x, acc_mm_s2.y, acc_mm_s2.z];
+        let c = self.core([pos_mm.x, pos_mm.y, pos_mm.z], v, a);
+        if !c.ok {
+            return Err(self.why_not(pos_mm, vel_mm_s, acc_mm_s2));
+        }
+        let (q, dq, p_z) = (c.q, c.dq, pos_mm.z + self.nozzle_offset_mm);
+        let (mi, mw, mp, g) = (
+            self.carriage_inertia_kg,
+            self.carriage_weight_kg,
+            self.platform_kg,
+            self.gravity_m_s2,
+        );
+        // K with the carriages' inertia, U with their weight (the rotor adds only to K).
+        let kinetic_j = 0.5 * (mi * dot(dq, dq) + mp * dot(v, v)) * MM * MM;
+        let potential_j = g * (mw * (q[0] + q[1] + q[2]) + mp * p_z) * MM;
         let arm2_sum = self.arm2_mm2[0] + self.arm2_mm2[1] + self.arm2_mm2[2];
-        let inv_f2 =
-            (dot(cof[0], cof[0]) + dot(cof[1], cof[1]) + dot(cof[2], cof[2])) * inv_det * inv_det;
+        let cof = &c.cof;
+        let inv_f2 = (dot(cof[0], cof[0]) + dot(cof[1], cof[1]) + dot(cof[2], cof[2]))
+            * c.inv_det
+            * c.inv_det;
         Ok(DynState {
             q_mm: q,
             dq_mm_s: dq,
-            ddq_mm_s2: ddq,
-            force_n: force,
-            lambda,
+            ddq_mm_s2: c.ddq,
+            force_n: c.force,
+            // eq. 13, Jx in m: Jx⁻ᵀ in 1/m = 1000 × its value in 1/mm.
+            lambda: c.w.map(|w| 0.5 * mp * w / MM),
             kinetic_j,
             potential_j,
-            power_w,
-            energy_rate_w,
+            power_w: c.power_w,
+            energy_rate_w: c.energy_rate_w,
             jx_condition: (arm2_sum * inv_f2).sqrt(),
         })
+    }
+
+    /// Why [`Self::core`] found a state invalid.
+    #[cold]
+    fn why_not(&self, pos_mm: Vec3, vel_mm_s: Vec3, acc_mm_s2: Vec3) -> Unreachable {
+        match self.inverse(pos_mm) {
+            Err(e) => e,
+            Ok(_) if !(vel_mm_s.iter().chain(acc_mm_s2.iter())).all(|x| x.is_finite()) => {
+                Unreachable::NotFinite
+            }
+            Ok(_) => Unreachable::Singular,
+        }
+    }
+
+    /// Actuator forces and the eq. 20 residual |dE/dt − Σ Q_i q̇_i| over a block of states,
+    /// the first `len` lanes (the lanes after them, up to a multiple of eight, are computed
+    /// too, from whatever they hold, and mean nothing). Compiled for AVX-512 and AVX2 as well
+    /// as the baseline, chosen at run time: the same operations in the same order, so the
+    /// results are the same bit for bit whichever runs.
+    pub fn forces_block(&self, states: &StateBlock, len: usize, out: &mut ForceBlock) {
+        // Whole vectors only: no scalar remainder loop.
+        let lanes = len.next_multiple_of(8).min(BLOCK);
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::arch::is_x86_feature_detected!("avx512f") {
+                // SAFETY: the CPU has AVX-512F, checked just above.
+                unsafe { self.forces_block_avx512(states, lanes, out) };
+                return;
+            }
+            if std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: the CPU has AVX2, checked just above.
+                unsafe { self.forces_block_avx2(states, lanes, out) };
+                return;
+            }
+        }
+        self.forces_block_generic(states, lanes, out);
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    fn forces_block_avx512(&self, states: &StateBlock, lanes: usize, out: &mut ForceBlock) {
+        self.forces_block_generic(states, lanes, out);
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn forces_block_avx2(&self, states: &StateBlock, lanes: usize, out: &mut ForceBlock) {
+        self.forces_block_generic(states, lanes, out);
+    }
+
+    #[inline(always)]
+    fn forces_block_generic(&self, s: &StateBlock, lanes: usize, out: &mut ForceBlock) {
+        for j in 0..lanes.min(BLOCK) {
+            let c = self.core(
+                [s.pos_mm[0][j], s.pos_mm[1][j], s.pos_mm[2][j]],
+                [s.vel_mm_s[0][j], s.vel_mm_s[1][j], s.vel_mm_s[2][j]],
+                [s.acc_mm_s2[0][j], s.acc_mm_s2[1][j], s.acc_mm_s2[2][j]],
+            );
+            out.force_n[0][j] = c.force[0];
+            out.force_n[1][j] = c.force[1];
+            out.force_n[2][j] = c.force[2];
+            out.energy_residual_w[j] = (c.energy_rate_w - c.power_w).abs();
+            out.ok[j] = c.ok;
+        }
+    }
+}
+
+/// States handed to [`DeltaModel::forces_block`] at a time.
+pub const BLOCK: usize = 128;
+
+/// A block of nozzle states, one array per coordinate (so that lanes vectorise): mm, mm/s,
+/// mm/s².
+#[derive(Clone, Debug)]
+pub struct StateBlock {
+    pub pos_mm: [[f64; BLOCK]; 3],
+    pub vel_mm_s: [[f64; BLOCK]; 3],
+    pub acc_mm_s2: [[f64; BLOCK]; 3],
+}
+
+/// What [`DeltaModel::forces_block`] finds for each state of a block.
+#[derive(Clone, Debug)]
+pub struct ForceBlock {
+    /// Q_i (eq. 14), N.
+    pub force_n: [[f64; BLOCK]; 3],
+    /// |dE/dt − Σ Q_i q̇_i| (eq. 20), W.
+    pub energy_residual_w: [f64; BLOCK],
+    /// False where the state has no valid pose: [`DeltaModel::evaluate`] says why.
+    pub ok: [bool; BLOCK],
+}
+
+impl Default for StateBlock {
+    fn default() -> Self {
+        StateBlock {
+            pos_mm: [[0.0; BLOCK]; 3],
+            vel_mm_s: [[0.0; BLOCK]; 3],
+            acc_mm_s2: [[0.0; BLOCK]; 3],
+        }
+    }
+}
+
+impl Default for ForceBlock {
+    fn default() -> Self {
+        ForceBlock {
+            force_n: [[0.0; BLOCK]; 3],
+            energy_residual_w: [0.0; BLOCK],
+            ok: [false; BLOCK],
+        }
     }
 }
 
@@ -416,6 +577,61 @@ mod tests {
         let bad = Vec3::new(f64::NAN, 0.0, 0.0);
         assert!(m.evaluate(Vec3::zeros(), bad, Vec3::zeros()).is_err());
         assert!(m.evaluate(Vec3::zeros(), Vec3::zeros(), bad).is_err());
+    }
+
+    #[test]
+    fn a_block_gives_the_forces_of_evaluate_bit_for_bit() {
+        // Random states, with unreachable, above-top and non-finite lanes among them; a
+        // partial block; every instruction set this CPU has against the baseline.
+        let m = kossel();
+        let mut states = StateBlock::default();
+        let all = random_states(BLOCK);
+        for (j, &(p, v, a)) in all.iter().take(BLOCK).enumerate() {
+            let p = match j % 16 {
+                3 => Vec3::new(0.0, -400.0, 10.0), // arm too short
+                7 => Vec3::new(0.0, 0.0, 400.0),   // above the top
+                11 => Vec3::new(f64::NAN, 0.0, 0.0),
+                _ => p,
+            };
+            let a = if j % 16 == 13 {
+                Vec3::new(0.0, f64::INFINITY, 0.0)
+            } else {
+                a
+            };
+            for k in 0..3 {
+                states.pos_mm[k][j] = p[k];
+                states.vel_mm_s[k][j] = v[k];
+                states.acc_mm_s2[k][j] = a[k];
+            }
+        }
+        let len = BLOCK - 5;
+        let mut fast = ForceBlock::default();
+        m.forces_block(&states, len, &mut fast);
+        let mut base = ForceBlock::default();
+        m.forces_block_generic(&states, len, &mut base);
+        let mut bad = 0;
+        for j in 0..len {
+            let at = |c: &[[f64; BLOCK]; 3]| Vec3::new(c[0][j], c[1][j], c[2][j]);
+            let s = m.evaluate(
+                at(&states.pos_mm),
+                at(&states.vel_mm_s),
+                at(&states.acc_mm_s2),
+            );
+            assert_eq!(fast.ok[j], s.is_ok(), "lane {j}: {s:?}");
+            assert_eq!(base.ok[j], fast.ok[j]);
+            let Ok(s) = s else {
+                bad += 1;
+                continue;
+            };
+            for i in 0..3 {
+                assert_eq!(fast.force_n[i][j].to_bits(), s.force_n[i].to_bits());
+                assert_eq!(base.force_n[i][j].to_bits(), s.force_n[i].to_bits());
+            }
+            let residual = (s.energy_rate_w - s.power_w).abs();
+            assert_eq!(fast.energy_residual_w[j].to_bits(), residual.to_bits());
+            assert_eq!(base.energy_residual_w[j].to_bits(), residual.to_bits());
+        }
+        assert!(bad >= 4 * (len / 16), "{bad} invalid lanes");
     }
 
     /// `cargo test --release -- --ignored evaluate_speed --nocapture`

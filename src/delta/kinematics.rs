@@ -6,16 +6,16 @@ use crate::path::Vec3;
 
 /// Smallest accepted radicand of eq. 6 (mm²): below it the arm is horizontal and Jq is
 /// singular.
-const MIN_RADICAND_MM2: f64 = 1e-9;
+pub(super) const MIN_RADICAND_MM2: f64 = 1e-9;
 /// Tolerance on the top of carriage travel, mm (rounding at the homed position).
-const TOP_TOLERANCE_MM: f64 = 1e-6;
+pub(super) const TOP_TOLERANCE_MM: f64 = 1e-6;
 
-#[inline]
+#[inline(always)]
 pub(super) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
-#[inline]
+#[inline(always)]
 pub(super) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [
         a[1] * b[2] - a[2] * b[1],
@@ -26,7 +26,7 @@ pub(super) fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
 
 /// The rows' cross products (r2×r3, r3×r1, r1×r2) and the determinant r1·(r2×r3) of the
 /// 3×3 matrix with rows `r`: M⁻¹ has columns c_i/det, so M⁻ᵀ has rows c_i/det.
-#[inline]
+#[inline(always)]
 pub(super) fn cofactors(r: &[[f64; 3]; 3]) -> ([[f64; 3]; 3], f64) {
     let c = [cross(r[1], r[2]), cross(r[2], r[0]), cross(r[0], r[1])];
     (c, dot(r[0], c[0]))
@@ -50,15 +50,8 @@ impl DeltaModel {
         if !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite()) {
             return Err(Unreachable::NotFinite);
         }
-        // Branch-free over the towers (the compiler pairs the square roots); the error
-        // details are worked out only on the cold path.
-        let radicand_of = |i: usize| {
-            let dx = p[0] - self.towers_mm[i][0];
-            let dy = p[1] - self.towers_mm[i][1];
-            self.arm2_mm2[i] - (dx * dx + dy * dy)
-        };
-        // Written out: `[T; N]::map` is not reliably inlined.
-        let radicand = [radicand_of(0), radicand_of(1), radicand_of(2)];
+        // The error details are worked out only on the cold path.
+        let radicand = self.radicands(p);
         if radicand.iter().any(|&r| r < MIN_RADICAND_MM2) {
             return Err(self.arm_too_short(p, radicand));
         }
@@ -71,6 +64,19 @@ impl DeltaModel {
             return Err(self.above_top(q));
         }
         Ok(q)
+    }
+
+    /// The radicands of eq. 6, l_i² − (horizontal distance from the platform to tower i)²,
+    /// mm²: the squared rise of each arm.
+    #[inline(always)]
+    pub(super) fn radicands(&self, p: [f64; 3]) -> [f64; 3] {
+        let radicand_of = |i: usize| {
+            let dx = p[0] - self.towers_mm[i][0];
+            let dy = p[1] - self.towers_mm[i][1];
+            self.arm2_mm2[i] - (dx * dx + dy * dy)
+        };
+        // Written out: `[T; N]::map` is not reliably inlined.
+        [radicand_of(0), radicand_of(1), radicand_of(2)]
     }
 
     #[cold]
@@ -103,7 +109,7 @@ impl DeltaModel {
     /// Rows of Jx (eq. 3): r_i = A_i − P = (B_i,x − x_P, B_i,y − y_P, q_i − z_P), mm. With
     /// Γ_i = l_i² − |P − A_i|², Jx = ½ ∂Γ/∂p and Jq = −½ ∂Γ/∂q = diag(q_i − z_P) = diag of the
     /// rows' third components; these signs give eq. 8 and eq. 13-14 exactly as printed.
-    #[inline]
+    #[inline(always)]
     pub(super) fn jx_rows(&self, p: [f64; 3], q: [f64; 3]) -> [[f64; 3]; 3] {
         let t = &self.towers_mm;
         let row = |i: usize| [t[i][0] - p[0], t[i][1] - p[1], q[i] - p[2]];

@@ -10,7 +10,7 @@ mod dynamics;
 mod kinematics;
 mod statics;
 
-pub use dynamics::DynState;
+pub use dynamics::{BLOCK, DynState, ForceBlock, StateBlock};
 
 use crate::machine::{Machine, TOWER_NAMES};
 

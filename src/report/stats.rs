@@ -96,15 +96,50 @@ impl MoveStats {
 
     /// Takes one evaluated sample into the peaks.
     pub fn add(&mut self, t_s: f64, phase: Phase, force_n: [f64; 3], energy_residual_w: f64) {
-        self.samples += 1;
-        for (i, f) in force_n.iter().enumerate() {
-            if f.abs() > self.peak_force_n[i] {
-                self.peak_force_n[i] = f.abs();
-                self.peak_t_s[i] = t_s;
-                self.peak_phase[i] = phase;
+        let f = force_n;
+        self.add_run(
+            &[t_s],
+            &[phase],
+            [&[f[0]], &[f[1]], &[f[2]]],
+            &[energy_residual_w],
+        );
+    }
+
+    /// Takes a run of evaluated samples, in time order, into the peaks: the same as adding
+    /// them one by one.
+    pub fn add_run(
+        &mut self,
+        t_s: &[f64],
+        phase: &[Phase],
+        force_n: [&[f64]; 3],
+        energy_residual_w: &[f64],
+    ) {
+        self.samples += t_s.len() as u64;
+        // One pass, branch-free, the three towers interleaved: the peak and the index of
+        // the first sample that reached it, as a scan with a strict `>` keeps.
+        let mut peak = self.peak_force_n;
+        let mut at = [usize::MAX; 3];
+        for (j, ((f0, f1), f2)) in force_n[0]
+            .iter()
+            .zip(force_n[1])
+            .zip(force_n[2])
+            .enumerate()
+        {
+            for (i, f) in [f0, f1, f2].into_iter().enumerate() {
+                let up = f.abs() > peak[i];
+                peak[i] = if up { f.abs() } else { peak[i] };
+                at[i] = if up { j } else { at[i] };
             }
         }
-        self.max_energy_residual_w = self.max_energy_residual_w.max(energy_residual_w);
+        for i in 0..3 {
+            if let Some((&t, &ph)) = t_s.get(at[i]).zip(phase.get(at[i])) {
+                self.peak_force_n[i] = peak[i];
+                self.peak_t_s[i] = t;
+                self.peak_phase[i] = ph;
+            }
+        }
+        let residual = energy_residual_w.iter().fold(0.0, |m: f64, &r| m.max(r));
+        self.max_energy_residual_w = self.max_energy_residual_w.max(residual);
     }
 
     /// Records a problem. A move keeps its most severe one (unreachable, then above home,
@@ -153,6 +188,39 @@ mod tests {
         assert_eq!(s.peak_phase, [Phase::Cruise, Phase::Accel, Phase::Cruise]);
         assert_eq!(s.worst_tower(), 1);
         assert_eq!(s.max_energy_residual_w, 3e-9);
+    }
+
+    #[test]
+    #[allow(clippy::needless_range_loop)] // i and k index towers and samples alike
+    fn a_run_gives_the_peaks_of_a_sample_by_sample_scan() {
+        // Against the plain scan: ties (the first kept), NaN (ignored), runs longer and
+        // shorter than eight lanes, a peak from before the run that holds.
+        let mut rng = crate::delta::test_support::Rng(11);
+        for n in [1, 3, 8, 13, 64] {
+            let t: Vec<f64> = (0..n).map(|k| k as f64 * 1e-3).collect();
+            let phases = [Phase::Accel, Phase::Cruise, Phase::Decel, Phase::Corner];
+            let phase: Vec<Phase> = (0..n).map(|k| phases[k % 4]).collect();
+            let mut f: [Vec<f64>; 3] =
+                [(); 3].map(|()| (0..n).map(|_| rng.range(-4.0, 4.0).round()).collect());
+            f[2][n / 2] = f64::NAN;
+            let res: Vec<f64> = (0..n).map(|_| rng.range(0.0, 1e-9)).collect();
+            let mut run = MoveStats::new(1);
+            run.add(0.0, Phase::Accel, [2.0, 0.5, 0.0], 0.0);
+            let mut scan = run.clone();
+            for k in 0..n {
+                scan.samples += 1;
+                for i in 0..3 {
+                    if f[i][k].abs() > scan.peak_force_n[i] {
+                        scan.peak_force_n[i] = f[i][k].abs();
+                        scan.peak_t_s[i] = t[k];
+                        scan.peak_phase[i] = phase[k];
+                    }
+                }
+                scan.max_energy_residual_w = scan.max_energy_residual_w.max(res[k]);
+            }
+            run.add_run(&t, &phase, [&f[0], &f[1], &f[2]], &res);
+            assert_eq!(run, scan, "n = {n}");
+        }
     }
 
     #[test]

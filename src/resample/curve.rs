@@ -1,84 +1,102 @@
 //! Curves parameterised by u ∈ [0, 1], the paper's Taylor step on them (eq. 19, generalised
 //! to accelerating motion) and the nozzle's velocity and acceleration along them.
 
-use crate::path::{Path, Vec3};
+use crate::path::{Jet, Path, Vec3};
 
 /// A curve p(u), u ∈ [0, 1], with its first two derivatives (bed frame, mm).
 pub trait Curve {
+    /// p(u), dp/du and d²p/du² together.
+    fn jet(&self, u: f64) -> Jet;
+
     /// Position p(u).
-    fn point(&self, u: f64) -> Vec3;
+    #[inline(always)]
+    fn point(&self, u: f64) -> Vec3 {
+        self.jet(u).p
+    }
     /// dp/du.
-    fn d1(&self, u: f64) -> Vec3;
+    #[inline(always)]
+    fn d1(&self, u: f64) -> Vec3 {
+        self.jet(u).d1
+    }
     /// d²p/du².
-    fn d2(&self, u: f64) -> Vec3;
+    #[inline(always)]
+    fn d2(&self, u: f64) -> Vec3 {
+        self.jet(u).d2
+    }
 }
 
 impl Curve for Path {
     #[inline(always)]
-    fn point(&self, u: f64) -> Vec3 {
-        Path::point(self, u)
-    }
-    #[inline(always)]
-    fn d1(&self, u: f64) -> Vec3 {
-        Path::d1(self, u)
-    }
-    #[inline(always)]
-    fn d2(&self, u: f64) -> Vec3 {
-        Path::d2(self, u)
+    fn jet(&self, u: f64) -> Jet {
+        Path::jet(self, u)
     }
 }
 
-/// One step of the curve parameter over `dt_s` for a nozzle moving at speed `v_mm_s` with
-/// tangential acceleration `a_t_mm_s2` (both at the start of the step), clamped to [0, 1].
+/// The paper's Taylor step (eq. 19), generalised to accelerating motion, from a fixed
+/// point: the nozzle at parameter u (where the curve's derivatives are `jet`) moving at speed
+/// v with tangential acceleration a_t. With u̇ = v/|p'| and ü = a_t/|p'| − v²·(p'·p'')/|p'|⁴,
+/// the second-order Taylor series gives u(dt) = u + dt·u̇ + dt²/2·ü, clamped to [0, 1].
+/// For a_t = 0 it is eq. 19 itself. A point where p' = 0 does not move.
 ///
-/// The paper's eq. 19 generalised to accelerating phases: with u̇ = v/|p'| and
-/// ü = a_t/|p'| − v²·(p'·p'')/|p'|⁴, the second-order Taylor series gives
-/// u+ = u + dt·v/|p'| + dt²/2·(a_t/|p'| − v²·(p'·p'')/|p'|⁴).
-/// For a_t = 0 it is eq. 19 itself. It is exact for lines and circular (helical) arcs,
-/// whose |p'| is constant. A point where p' = 0 does not move.
-#[inline(always)]
-pub fn taylor_step<C: Curve + ?Sized>(
-    curve: &C,
+/// It is exact for lines and circular (helical) arcs, whose |p'| is constant and p'·p''
+/// zero, for a step of any length.
+#[derive(Clone, Copy, Debug)]
+pub struct TaylorStep {
     u: f64,
-    v_mm_s: f64,
-    a_t_mm_s2: f64,
-    dt_s: f64,
-) -> f64 {
-    let d1 = curve.d1(u);
-    let n2 = d1.norm_squared();
-    if n2 == 0.0 {
-        return u.clamp(0.0, 1.0);
-    }
-    let n = n2.sqrt();
-    let udot = v_mm_s / n;
-    let uddot = a_t_mm_s2 / n - v_mm_s * v_mm_s * d1.dot(&curve.d2(u)) / (n2 * n2);
-    (u + dt_s * udot + 0.5 * dt_s * dt_s * uddot).clamp(0.0, 1.0)
+    udot: f64,
+    uddot: f64,
 }
 
-/// Position, velocity and acceleration of a nozzle at parameter u moving forward along the
-/// curve at speed `v_mm_s` with tangential acceleration `a_t_mm_s2`:
+impl TaylorStep {
+    #[inline(always)]
+    pub fn new(jet: &Jet, u: f64, v_mm_s: f64, a_t_mm_s2: f64) -> Self {
+        let n2 = jet.d1.norm_squared();
+        if n2 == 0.0 {
+            return TaylorStep {
+                u,
+                udot: 0.0,
+                uddot: 0.0,
+            };
+        }
+        let inv_n = 1.0 / n2.sqrt();
+        let inv_n2 = inv_n * inv_n;
+        TaylorStep {
+            u,
+            udot: v_mm_s * inv_n,
+            uddot: a_t_mm_s2 * inv_n - v_mm_s * v_mm_s * jet.d1.dot(&jet.d2) * (inv_n2 * inv_n2),
+        }
+    }
+
+    /// The parameter `dt_s` after the starting point.
+    #[inline(always)]
+    pub fn at(&self, dt_s: f64) -> f64 {
+        (self.u + dt_s * self.udot + 0.5 * dt_s * dt_s * self.uddot).clamp(0.0, 1.0)
+    }
+}
+
+/// One Taylor step of `dt_s` from u: [`TaylorStep`].
+#[inline(always)]
+pub fn taylor_step(jet: &Jet, u: f64, v_mm_s: f64, a_t_mm_s2: f64, dt_s: f64) -> f64 {
+    TaylorStep::new(jet, u, v_mm_s, a_t_mm_s2).at(dt_s)
+}
+
+/// Velocity and acceleration of a nozzle where the curve's derivatives are `jet`, moving
+/// forward along it at speed `v_mm_s` with tangential acceleration `a_t_mm_s2`:
 /// velocity v·T with T = p'/|p'|, acceleration a_t·T + v²/|p'|²·(p'' − (p''·T)·T), the
 /// second term being the centripetal v²·κ along the principal normal. A point where p' = 0
 /// has zero velocity and acceleration.
 #[inline(always)]
-pub fn motion_on<C: Curve + ?Sized>(
-    curve: &C,
-    u: f64,
-    v_mm_s: f64,
-    a_t_mm_s2: f64,
-) -> (Vec3, Vec3, Vec3) {
-    let pos = curve.point(u);
-    let d1 = curve.d1(u);
-    let n2 = d1.norm_squared();
+pub fn motion(jet: &Jet, v_mm_s: f64, a_t_mm_s2: f64) -> (Vec3, Vec3) {
+    let n2 = jet.d1.norm_squared();
     if n2 == 0.0 {
-        return (pos, Vec3::zeros(), Vec3::zeros());
+        return (Vec3::zeros(), Vec3::zeros());
     }
-    let tangent = d1 / n2.sqrt();
-    let d2 = curve.d2(u);
-    let normal_part = d2 - tangent * d2.dot(&tangent);
+    let inv_n = 1.0 / n2.sqrt();
+    let tangent = jet.d1 * inv_n;
+    let normal_part = jet.d2 - tangent * jet.d2.dot(&tangent);
     let vel = tangent * v_mm_s;
-    let acc = tangent * a_t_mm_s2 + normal_part * (v_mm_s * v_mm_s / n2);
-    (pos, vel, acc)
+    let acc = tangent * a_t_mm_s2 + normal_part * (v_mm_s * v_mm_s * (inv_n * inv_n));
+    (vel, acc)
 }
 
 /// The paper's Lissajous path (eq. 18): x = x0·sin(ω_x·u + φ_x), y = y0·sin(ω_y·u + φ_y),
@@ -112,26 +130,19 @@ impl Lissajous {
 }
 
 impl Curve for Lissajous {
-    fn point(&self, u: f64) -> Vec3 {
-        Vec3::new(
-            self.x0_mm * (self.wx * u + self.phx).sin(),
-            self.y0_mm * (self.wy * u + self.phy).sin(),
-            self.z_mm,
-        )
-    }
-    fn d1(&self, u: f64) -> Vec3 {
-        Vec3::new(
-            self.x0_mm * self.wx * (self.wx * u + self.phx).cos(),
-            self.y0_mm * self.wy * (self.wy * u + self.phy).cos(),
-            0.0,
-        )
-    }
-    fn d2(&self, u: f64) -> Vec3 {
-        Vec3::new(
-            -self.x0_mm * self.wx * self.wx * (self.wx * u + self.phx).sin(),
-            -self.y0_mm * self.wy * self.wy * (self.wy * u + self.phy).sin(),
-            0.0,
-        )
+    fn jet(&self, u: f64) -> Jet {
+        let (sx, cx) = (self.wx * u + self.phx).sin_cos();
+        let (sy, cy) = (self.wy * u + self.phy).sin_cos();
+        let (ax, ay) = (self.x0_mm, self.y0_mm);
+        Jet {
+            p: Vec3::new(ax * sx, ay * sy, self.z_mm),
+            d1: Vec3::new(ax * self.wx * cx, ay * self.wy * cy, 0.0),
+            d2: Vec3::new(
+                -ax * self.wx * self.wx * sx,
+                -ay * self.wy * self.wy * sy,
+                0.0,
+            ),
+        }
     }
 }
 
@@ -148,7 +159,7 @@ pub fn walk_constant_speed<C: Curve + ?Sized>(
     let mut u = 0.0;
     out(u);
     for _ in 0..max_steps {
-        u = taylor_step(curve, u, v_mm_s, 0.0, period_s);
+        u = taylor_step(&curve.jet(u), u, v_mm_s, 0.0, period_s);
         out(u);
         if u >= 1.0 {
             return true;
@@ -207,7 +218,7 @@ mod tests {
             let (v0, a, dt) = (20.0, 1500.0, 0.004);
             let mut u = 0.1;
             for _ in 0..5 {
-                let u1 = taylor_step(&path, u, v0, a, dt);
+                let u1 = taylor_step(&path.jet(u), u, v0, a, dt);
                 // Closed form: s advances by v0·dt + a·dt²/2, s = u·len.
                 let expect = u + (v0 * dt + 0.5 * a * dt * dt) / len;
                 assert!((u1 - expect).abs() < 1e-14, "{u1} vs {expect}");
@@ -219,10 +230,10 @@ mod tests {
     #[test]
     fn step_clamps_and_survives_degenerate_curve() {
         let line = Path::line(Vec3::zeros(), Vec3::new(1.0, 0.0, 0.0));
-        assert_eq!(taylor_step(&line, 0.99, 100.0, 0.0, 1.0), 1.0);
+        assert_eq!(taylor_step(&line.jet(0.99), 0.99, 100.0, 0.0, 1.0), 1.0);
         let point = Path::line(Vec3::zeros(), Vec3::zeros());
-        assert_eq!(taylor_step(&point, 0.3, 100.0, 10.0, 1.0), 0.3);
-        let (_, v, a) = motion_on(&point, 0.3, 100.0, 10.0);
+        assert_eq!(taylor_step(&point.jet(0.3), 0.3, 100.0, 10.0, 1.0), 0.3);
+        let (v, a) = motion(&point.jet(0.3), 100.0, 10.0);
         assert_eq!((v, a), (Vec3::zeros(), Vec3::zeros()));
     }
 
@@ -247,7 +258,7 @@ mod tests {
         for &u in &[0.05, 0.21, 0.4, 0.63, 0.9] {
             let (d1, d2) = (c.d1(u), c.d2(u));
             let kappa = d1.cross(&d2).norm() / d1.norm().powi(3);
-            let (_, vel, acc) = motion_on(&c, u, v, at);
+            let (vel, acc) = motion(&c.jet(u), v, at);
             let t = d1.normalize();
             assert!((vel - t * v).norm() < 1e-12 * v);
             assert!((acc.dot(&t) - at).abs() < 1e-9 * at.abs());
@@ -258,7 +269,7 @@ mod tests {
 
     /// Arc-length error of one step at constant speed: |s(u+) − s(u) − v·Ts|.
     fn step_error(c: &Lissajous, u: f64, v: f64, ts: f64) -> f64 {
-        let u1 = taylor_step(c, u, v, 0.0, ts);
+        let u1 = taylor_step(&c.jet(u), u, v, 0.0, ts);
         (arc_length(c, u, u1) - v * ts).abs()
     }
 

@@ -7,7 +7,7 @@ use crate::path::Vec3;
 pub mod curve;
 mod sampler;
 
-pub use curve::{Curve, Lissajous, motion_on, taylor_step, walk_constant_speed};
+pub use curve::{Curve, Lissajous, TaylorStep, motion, taylor_step, walk_constant_speed};
 pub use sampler::sample_move;
 
 /// Where in its move a sample lies.
@@ -19,6 +19,19 @@ pub enum Phase {
     Decel,
     /// Within half a period of a junction, where the velocity impulse is spread.
     Corner,
+}
+
+/// Where the resampler's samples go, in time order. A closure taking a [`Sample`] is one;
+/// a type of its own can have its method inlined into the sampling loop.
+pub trait SampleSink {
+    fn sample(&mut self, s: Sample);
+}
+
+impl<F: FnMut(Sample)> SampleSink for F {
+    #[inline(always)]
+    fn sample(&mut self, s: Sample) {
+        self(s)
+    }
 }
 
 /// The nozzle's state at one instant (bed frame, mm, s).

@@ -14,9 +14,9 @@
 //! The next move's junction sample is the right limit at the same instant. A move whose
 //! span is empty (t_end ≤ t0) emits only its junction sample.
 
-use super::curve::{Curve, motion_on, taylor_step};
-use super::{Phase, Sample};
-use crate::path::{Path, Vec3};
+use super::curve::{Curve, TaylorStep, motion};
+use super::{Phase, Sample, SampleSink};
+use crate::path::{Jet, Path, Vec3};
 use crate::planner::PlannedMove;
 
 /// Samples of `mv` (see the module doc for which samples a move owns), in time order.
@@ -40,7 +40,7 @@ pub fn sample_move(
     mv: &PlannedMove,
     next: Option<&PlannedMove>,
     period_s: f64,
-    out: &mut impl FnMut(Sample),
+    out: &mut impl SampleSink,
 ) {
     let t_end = next.map_or(mv.t0_s + mv.duration_s(), |n| n.t0_s);
     let half = |d: f64| 0.5 * d.max(0.0).min(period_s);
@@ -132,16 +132,12 @@ struct Line {
 
 impl Curve for Line {
     #[inline(always)]
-    fn point(&self, u: f64) -> Vec3 {
-        self.start + self.delta * u
-    }
-    #[inline(always)]
-    fn d1(&self, _u: f64) -> Vec3 {
-        self.delta
-    }
-    #[inline(always)]
-    fn d2(&self, _u: f64) -> Vec3 {
-        Vec3::zeros()
+    fn jet(&self, u: f64) -> Jet {
+        Jet {
+            p: self.start + self.delta * u,
+            d1: self.delta,
+            d2: Vec3::zeros(),
+        }
     }
 }
 
@@ -152,7 +148,7 @@ fn sample_span(
     t_end: f64,
     period_s: f64,
     impulse: impl Fn(f64) -> Vec3,
-    out: &mut impl FnMut(Sample),
+    out: &mut impl SampleSink,
 ) {
     match mv.path {
         Path::Line { start, end } => {
@@ -173,7 +169,7 @@ fn sample_curve<C: Curve>(
     t_end: f64,
     period_s: f64,
     impulse: impl Fn(f64) -> Vec3,
-    out: &mut impl FnMut(Sample),
+    out: &mut impl SampleSink,
 ) {
     if !(period_s > 0.0 && period_s.is_finite()) {
         return;
@@ -229,70 +225,120 @@ fn sample_curve<C: Curve>(
         }
     }
 
-    let mut u = 0.0;
-    let mut t_prev = t0;
-    let mut emit = |t: f64, law: &PhaseLaw, u: f64| {
-        let v = law.speed(t);
-        let (pos, vel, acc) = if mv.kinematic {
-            motion_on(curve, u, v, law.a_mm_s2)
+    let mut w = Walker {
+        mv,
+        curve,
+        impulse,
+        out,
+        u: 0.0,
+        t_s: t0,
+        jet: curve.jet(0.0),
+        from: TaylorStep::new(&curve.jet(0.0), 0.0, 0.0, 0.0),
+        from_t_s: t0,
+    };
+    w.start_phase(&law);
+    // One sample per turn, stepped to in the phase in force and emitted under `law`: a
+    // single call site, so that the sink is inlined once. A boundary's left limit is
+    // followed by its right limit at the same time (`right`).
+    let mut k = first_grid_index(t0, period_s);
+    if k as f64 * period_s <= t0 {
+        k += 1; // the grid point at t0 is the junction sample
+    }
+    let (mut t, mut b, mut right, mut done) = (t0, 0, None, t_end <= t0);
+    loop {
+        w.step_to(t);
+        w.emit(&law);
+        if done {
+            return;
+        }
+        if let Some(r) = right.take() {
+            law = r;
+            w.start_phase(&law);
+            continue;
+        }
+        let tg = k as f64 * period_s;
+        match bounds[..nb].get(b).copied().flatten() {
+            Some(next_law) if next_law.t_s <= tg => {
+                t = next_law.t_s;
+                right = Some(next_law);
+                b += 1;
+                if t == tg {
+                    k += 1;
+                }
+            }
+            _ if tg >= t_end => {
+                t = t_end;
+                done = true;
+            }
+            _ => {
+                t = tg;
+                k += 1;
+            }
+        }
+    }
+}
+
+/// The nozzle's walk along one move: the curve parameter u at time `t_s` and the curve's
+/// derivatives there; the Taylor step (eq. 19) from the start of the phase in force.
+///
+/// Each sample is one step from the phase's start, not from the sample before: for the
+/// paths G-code has (lines, circular and helical arcs) the step is exact at any length (see
+/// [`TaylorStep`]), so the two give the same positions, but steps from a fixed point do not
+/// wait for one another (and do not accumulate rounding).
+struct Walker<'a, C, I, O> {
+    mv: &'a PlannedMove,
+    curve: &'a C,
+    impulse: I,
+    out: &'a mut O,
+    u: f64,
+    t_s: f64,
+    jet: Jet,
+    from: TaylorStep,
+    from_t_s: f64,
+}
+
+impl<C: Curve, I: Fn(f64) -> Vec3, O: SampleSink> Walker<'_, C, I, O> {
+    /// Emits the sample at the current time under `law`.
+    #[inline(always)]
+    fn emit(&mut self, law: &PhaseLaw) {
+        let t = self.t_s;
+        let (vel, acc) = if self.mv.kinematic {
+            motion(&self.jet, law.speed(t), law.a_mm_s2)
         } else {
-            (curve.point(0.0), Vec3::zeros(), Vec3::zeros())
+            (Vec3::zeros(), Vec3::zeros())
         };
-        let kick = impulse(t);
+        let kick = (self.impulse)(t);
         let phase = if kick.norm_squared() <= CORNER_MIN_MM_S2 * CORNER_MIN_MM_S2 {
             law.phase
         } else {
             Phase::Corner
         };
-        out(Sample {
+        self.out.sample(Sample {
             t_s: t,
-            line: mv.line,
+            line: self.mv.line,
             phase,
-            pos_mm: pos,
+            pos_mm: self.jet.p,
             vel_mm_s: vel,
             acc_mm_s2: acc + kick,
         });
-    };
-    let mut step = |t: f64, law: &PhaseLaw, u: &mut f64| {
-        if mv.kinematic {
-            *u = taylor_step(curve, *u, law.speed(t_prev), law.a_mm_s2, t - t_prev);
-        }
-        t_prev = t;
-    };
+    }
 
-    emit(t0, &law, u);
-    if t_end <= t0 {
-        return;
+    /// Starts the phase of `law` at the current time and position.
+    #[inline(always)]
+    fn start_phase(&mut self, law: &PhaseLaw) {
+        self.from = TaylorStep::new(&self.jet, self.u, law.speed(self.t_s), law.a_mm_s2);
+        self.from_t_s = self.t_s;
     }
-    let mut k = first_grid_index(t0, period_s);
-    let mut b = 0;
-    loop {
-        let tg = k as f64 * period_s;
-        if let Some(next_law) = bounds[..nb].get(b).copied().flatten()
-            && next_law.t_s <= tg
-        {
-            let tb = next_law.t_s;
-            step(tb, &law, &mut u);
-            emit(tb, &law, u);
-            law = next_law;
-            emit(tb, &law, u);
-            b += 1;
-            if tb == tg {
-                k += 1;
-            }
-            continue;
+
+    /// Moves the nozzle on to time `t` in the current phase.
+    #[inline(always)]
+    fn step_to(&mut self, t: f64) {
+        if self.mv.kinematic && t != self.t_s {
+            self.u = self.from.at(t - self.from_t_s);
+            self.jet = self.curve.jet(self.u);
         }
-        if tg >= t_end {
-            break;
-        }
-        if tg > t0 {
-            step(tg, &law, &mut u);
-            emit(tg, &law, u);
-        }
-        k += 1;
+        self.t_s = t;
     }
-    step(t_end, &law, &mut u);
-    emit(t_end, &law, u);
 }
 
 #[cfg(test)]
@@ -528,7 +574,10 @@ mod tests {
         let line = Path::line(Vec3::new(-10.0, 5.0, 1.0), Vec3::new(25.0, -20.0, 31.0));
         let (r, th0, sweep) = (15.0, 0.7, 1.2 * PI);
         let arc_path = arc(r, th0, sweep);
-        for path in [line, arc_path] {
+        // 20 turns, 12,000 samples or more: each sample is one step from its phase's start,
+        // so nothing drifts over a long move.
+        let long_arc = arc(r, th0, 40.0 * PI);
+        for path in [line, arc_path, long_arc] {
             for (vc, acc) in [(150.0_f64, 3000.0), (400.0, 1500.0)] {
                 let len = path.length_mm();
                 let vc = vc.min((acc * len).sqrt());

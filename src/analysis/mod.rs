@@ -3,7 +3,6 @@
 //! back in file order).
 
 use std::collections::{BTreeSet, HashMap};
-use std::fmt::Write as _;
 use std::fs::File;
 use std::io::{self, BufRead, BufReader, Read};
 use std::path::Path;
@@ -13,13 +12,14 @@ use anyhow::Context;
 use indicatif::ProgressBar;
 use rayon::prelude::*;
 
-use crate::delta::{DeltaModel, Unreachable};
 use crate::gcode::{self, Diagnostic, Event, ReadStats, Severity};
 use crate::machine::Machine;
-use crate::path::Vec3;
 use crate::planner::{PlannedMove, Planner};
-use crate::report::{MAX_LISTED, MoveStats, NEAR_SINGULAR_RATIO, Problem, Report};
-use crate::resample::sample_move;
+use crate::report::{MAX_LISTED, MoveStats, Report};
+
+mod move_check;
+
+pub use move_check::{MoveChecker, Scratch};
 
 /// The progress bar's move count is updated this often.
 const PROGRESS_EVERY_MOVES: u64 = 4096;
@@ -27,13 +27,8 @@ const PROGRESS_EVERY_MOVES: u64 = 4096;
 /// Planned moves handed to the parallel stage at a time.
 const BATCH: usize = 4096;
 
-/// Tolerance on the print radius and the bed, mm: rounding in slicer output.
-const GEOMETRY_TOLERANCE_MM: f64 = 1e-3;
-
-/// A move longer than this many sampling periods (2.8 h at 1 kHz) is not sampled: only its
-/// ends are checked. Nothing printable lasts that long; a feed rate near zero or a huge
-/// coordinate does, and would otherwise keep the check busy for hours.
-const MAX_SAMPLES_PER_MOVE: f64 = 1e7;
+/// Consecutive moves checked by one rayon task (their samples share the model's blocks).
+const CHUNK: usize = 64;
 
 /// What the model found for one planned move.
 pub struct MoveResult {
@@ -122,9 +117,7 @@ pub fn run<R: Read>(
 
 /// The parallel stage: planned moves waiting for their model run.
 struct ModelStage<'m> {
-    machine: &'m Machine,
-    model: DeltaModel,
-    options: RunOptions,
+    checker: MoveChecker<'m>,
     pending: Vec<PlannedMove>,
     /// The last move processed: the previous move of the next batch's first.
     prev: Option<PlannedMove>,
@@ -132,11 +125,8 @@ struct ModelStage<'m> {
 
 impl<'m> ModelStage<'m> {
     fn new(machine: &'m Machine, options: RunOptions) -> Self {
-        let model = DeltaModel::new(machine);
         ModelStage {
-            machine,
-            model,
-            options,
+            checker: MoveChecker::new(machine, options),
             pending: Vec::new(),
             prev: None,
         }
@@ -155,163 +145,24 @@ impl<'m> ModelStage<'m> {
         }
         let pending = &self.pending;
         let prev = self.prev;
-        let results: Vec<MoveResult> = (0..n)
+        let results: Vec<Vec<MoveResult>> = (0..n.div_ceil(CHUNK))
             .into_par_iter()
-            .map(|i| {
-                let before = if i == 0 {
-                    prev.as_ref()
-                } else {
-                    pending.get(i - 1)
+            .map_init(Box::<Scratch>::default, |scratch, c| {
+                let run = c * CHUNK..n.min((c + 1) * CHUNK);
+                let before = match run.start {
+                    0 => prev.as_ref(),
+                    i => pending.get(i - 1),
                 };
-                if self.options.trace {
-                    self.evaluate::<true>(before, &pending[i], pending.get(i + 1))
-                } else {
-                    self.evaluate::<false>(before, &pending[i], pending.get(i + 1))
-                }
+                let mut out = Vec::with_capacity(run.len());
+                let after = pending.get(run.end);
+                self.checker
+                    .check_run(scratch, before, &pending[run], after, &mut out);
+                out
             })
             .collect();
-        results.into_iter().for_each(&mut *on_move);
+        results.into_iter().flatten().for_each(&mut *on_move);
         self.prev = Some(self.pending[n - 1]);
         self.pending.drain(..n);
-    }
-
-    /// Resamples one move and runs the delta model on every sample; with `TRACE`, writes the
-    /// trace rows too (a constant, so the check's loop computes nothing it does not use).
-    fn evaluate<const TRACE: bool>(
-        &self,
-        prev: Option<&PlannedMove>,
-        mv: &PlannedMove,
-        next: Option<&PlannedMove>,
-    ) -> MoveResult {
-        let mut stats = MoveStats::new(mv.line);
-        let mut trace = String::new();
-        let mut window = Vec::new();
-        let end = mv.path.end();
-        let end_xy_mm = [end.x, end.y];
-        let (from_s, to_s) = self
-            .options
-            .window_s
-            .unwrap_or((f64::INFINITY, f64::NEG_INFINITY));
-        self.check_geometry(mv, &mut stats);
-        let period_s = self.machine.sampling.period_s;
-        if mv.duration_s() > MAX_SAMPLES_PER_MOVE * period_s {
-            stats.flag(Problem::NotSampled {
-                duration_s: mv.duration_s(),
-            });
-            for (u, t_s) in [(0.0, mv.t0_s), (1.0, mv.t0_s + mv.duration_s())] {
-                let pos = mv.path.point(u);
-                if let Err(e) = self.model.inverse(pos) {
-                    stats.flag(unreachable(e, t_s, pos));
-                }
-            }
-            return MoveResult {
-                stats,
-                trace,
-                window,
-                end_xy_mm,
-            };
-        }
-        sample_move(prev, mv, next, period_s, &mut |s| {
-            match self.model.evaluate(s.pos_mm, s.vel_mm_s, s.acc_mm_s2) {
-                Ok(st) => {
-                    stats.add(
-                        s.t_s,
-                        s.phase,
-                        st.force_n,
-                        (st.energy_rate_w - st.power_w).abs(),
-                    );
-                    if s.t_s >= from_s && s.t_s <= to_s {
-                        window.push((s.t_s, st.force_n));
-                    }
-                    if TRACE {
-                        let p = &s.pos_mm;
-                        let v = &s.vel_mm_s;
-                        let a = &s.acc_mm_s2;
-                        let (q, dq, ddq, f) = (st.q_mm, st.dq_mm_s, st.ddq_mm_s2, st.force_n);
-                        // Display of f64 is the shortest text that reads back to the same value.
-                        let _ = writeln!(
-                            trace,
-                            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-                            s.t_s,
-                            s.line,
-                            p.x,
-                            p.y,
-                            p.z,
-                            v.x,
-                            v.y,
-                            v.z,
-                            a.x,
-                            a.y,
-                            a.z,
-                            q[0],
-                            q[1],
-                            q[2],
-                            dq[0],
-                            dq[1],
-                            dq[2],
-                            ddq[0],
-                            ddq[1],
-                            ddq[2],
-                            f[0],
-                            f[1],
-                            f[2],
-                            st.power_w,
-                            st.energy_rate_w
-                        );
-                    }
-                }
-                Err(e) => stats.flag(unreachable(e, s.t_s, s.pos_mm)),
-            }
-        });
-        MoveResult {
-            stats,
-            trace,
-            window,
-            end_xy_mm,
-        }
-    }
-
-    /// The checks on the move's path as a whole: the print disc, the bed, and how close
-    /// the arms come to flat (the carriage speed ratio peaks where the path is farthest
-    /// from a tower).
-    fn check_geometry(&self, mv: &PlannedMove, stats: &mut MoveStats) {
-        let limit_mm = self.machine.geometry.print_radius_mm;
-        let radius_mm = mv.path.max_xy2_mm2().sqrt();
-        if radius_mm > limit_mm + GEOMETRY_TOLERANCE_MM {
-            stats.flag(Problem::OutsideRadius {
-                radius_mm,
-                limit_mm,
-            });
-        }
-        let z_mm = mv.path.min_z_mm();
-        if z_mm < -GEOMETRY_TOLERANCE_MM {
-            stats.flag(Problem::BelowBed { z_mm });
-        }
-        for (tower, xy) in self.model.towers_xy_mm().into_iter().enumerate() {
-            let ratio = self
-                .model
-                .carriage_speed_ratio(tower, mv.path.max_dist2_from_mm2(xy).sqrt());
-            if ratio > NEAR_SINGULAR_RATIO && stats.near_singular.is_none_or(|(_, r)| ratio > r) {
-                stats.near_singular = Some((tower, ratio));
-            }
-        }
-    }
-}
-
-/// The problem of a pose the model cannot take.
-fn unreachable(e: Unreachable, t_s: f64, pos: Vec3) -> Problem {
-    match e {
-        Unreachable::AboveTop { tower, over_mm } => Problem::AboveHome {
-            t_s,
-            tower,
-            over_mm,
-        },
-        e => Problem::Unreachable {
-            t_s,
-            tower: e.tower(),
-            pos_mm: [pos.x, pos.y, pos.z],
-            reason: e.to_string(),
-        },
     }
 }
 
