@@ -80,23 +80,52 @@ pub fn taylor_step(jet: &Jet, u: f64, v_mm_s: f64, a_t_mm_s2: f64, dt_s: f64) ->
     TaylorStep::new(jet, u, v_mm_s, a_t_mm_s2).at(dt_s)
 }
 
-/// Velocity and acceleration of a nozzle where the curve's derivatives are `jet`, moving
-/// forward along it at speed `v_mm_s` with tangential acceleration `a_t_mm_s2`:
-/// velocity v·T with T = p'/|p'|, acceleration a_t·T + v²/|p'|²·(p'' − (p''·T)·T), the
-/// second term being the centripetal v²·κ along the principal normal. A point where p' = 0
-/// has zero velocity and acceleration.
+/// The unit tangent T = p'/|p'| of a curve at one point and the part of p'' across it,
+/// scaled: what the nozzle's velocity and acceleration there are made of (zero where p' = 0).
+#[derive(Clone, Copy, Debug)]
+pub struct Frame {
+    tangent: Vec3,
+    normal_part: Vec3,
+    inv_n2: f64,
+}
+
+impl Frame {
+    #[inline(always)]
+    pub fn new(jet: &Jet) -> Frame {
+        let n2 = jet.d1.norm_squared();
+        if n2 == 0.0 {
+            return Frame {
+                tangent: Vec3::zeros(),
+                normal_part: Vec3::zeros(),
+                inv_n2: 0.0,
+            };
+        }
+        let inv_n = 1.0 / n2.sqrt();
+        let tangent = jet.d1 * inv_n;
+        Frame {
+            tangent,
+            normal_part: jet.d2 - tangent * jet.d2.dot(&tangent),
+            inv_n2: inv_n * inv_n,
+        }
+    }
+
+    /// Velocity and acceleration of a nozzle moving forward along the curve at speed
+    /// `v_mm_s` with tangential acceleration `a_t_mm_s2`: velocity v·T, acceleration
+    /// a_t·T + v²/|p'|²·(p'' − (p''·T)·T), the second term being the centripetal v²·κ along
+    /// the principal normal. Zero where p' = 0.
+    #[inline(always)]
+    pub fn motion(&self, v_mm_s: f64, a_t_mm_s2: f64) -> (Vec3, Vec3) {
+        let vel = self.tangent * v_mm_s;
+        let acc = self.tangent * a_t_mm_s2 + self.normal_part * (v_mm_s * v_mm_s * self.inv_n2);
+        (vel, acc)
+    }
+}
+
+/// Velocity and acceleration of a nozzle where the curve's derivatives are `jet`:
+/// [`Frame::motion`].
 #[inline(always)]
 pub fn motion(jet: &Jet, v_mm_s: f64, a_t_mm_s2: f64) -> (Vec3, Vec3) {
-    let n2 = jet.d1.norm_squared();
-    if n2 == 0.0 {
-        return (Vec3::zeros(), Vec3::zeros());
-    }
-    let inv_n = 1.0 / n2.sqrt();
-    let tangent = jet.d1 * inv_n;
-    let normal_part = jet.d2 - tangent * jet.d2.dot(&tangent);
-    let vel = tangent * v_mm_s;
-    let acc = tangent * a_t_mm_s2 + normal_part * (v_mm_s * v_mm_s * (inv_n * inv_n));
-    (vel, acc)
+    Frame::new(jet).motion(v_mm_s, a_t_mm_s2)
 }
 
 /// The paper's Lissajous path (eq. 18): x = x0·sin(ω_x·u + φ_x), y = y0·sin(ω_y·u + φ_y),

@@ -14,7 +14,7 @@
 //! The next move's junction sample is the right limit at the same instant. A move whose
 //! span is empty (t_end ≤ t0) emits only its junction sample.
 
-use super::curve::{Curve, TaylorStep, motion};
+use super::curve::{Curve, Frame, TaylorStep};
 use super::{Phase, Sample, SampleSink};
 use crate::path::{Jet, Path, Vec3};
 use crate::planner::PlannedMove;
@@ -42,6 +42,17 @@ pub fn sample_move(
     period_s: f64,
     out: &mut impl SampleSink,
 ) {
+    let (t_end, kicks) = span(prev, mv, next, period_s);
+    sample_span(mv, t_end, period_s, kicks, out);
+}
+
+/// The end of the span `mv` owns and its junction impulses (see [`sample_move`]).
+fn span(
+    prev: Option<&PlannedMove>,
+    mv: &PlannedMove,
+    next: Option<&PlannedMove>,
+    period_s: f64,
+) -> (f64, Kicks) {
     let t_end = next.map_or(mv.t0_s + mv.duration_s(), |n| n.t0_s);
     let half = |d: f64| 0.5 * d.max(0.0).min(period_s);
     let own = half(t_end - mv.t0_s);
@@ -50,16 +61,37 @@ pub fn sample_move(
     let start_kick = impulse_density(start_dv, prev.map_or(0.0, |p| half(p.duration_s())) + own);
     let end_dv = next.map_or(Vec3::zeros(), start_velocity) - end_velocity(mv);
     let end_kick = impulse_density(end_dv, own + next.map_or(0.0, |n| half(n.duration_s())));
-    let impulse = |t: f64| {
-        if t < mv.t0_s + own {
-            start_kick
-        } else if t >= t_end - own {
-            end_kick
+    let kicks = Kicks {
+        start: start_kick,
+        end: end_kick,
+        calm_from_s: mv.t0_s + own,
+        calm_to_s: t_end - own,
+    };
+    (t_end, kicks)
+}
+
+/// The junction impulses of a move: `start` before `calm_from_s`, `end` from `calm_to_s`
+/// on, none in between.
+#[derive(Clone, Copy)]
+struct Kicks {
+    start: Vec3,
+    end: Vec3,
+    calm_from_s: f64,
+    calm_to_s: f64,
+}
+
+impl Kicks {
+    /// The acceleration the impulses add at time `t`.
+    #[inline(always)]
+    fn at(&self, t: f64) -> Vec3 {
+        if t < self.calm_from_s {
+            self.start
+        } else if t >= self.calm_to_s {
+            self.end
         } else {
             Vec3::zeros()
         }
-    };
-    sample_span(mv, t_end, period_s, impulse, out);
+    }
 }
 
 /// A velocity jump spread evenly over `width_s`: the acceleration it adds (none over a
@@ -112,7 +144,12 @@ impl PhaseLaw {
 
 /// Smallest k with k·Ts ≥ t (the grid time is always computed as `k as f64 * period_s`).
 fn first_grid_index(t: f64, period_s: f64) -> i64 {
-    let mut k = (t / period_s).ceil() as i64;
+    // ⌈t/Ts⌉ without `f64::ceil`, a library call on baseline x86-64.
+    let q = t / period_s;
+    let mut k = q as i64;
+    if (k as f64) < q {
+        k += 1;
+    }
     while (k as f64) * period_s < t {
         k += 1;
     }
@@ -125,6 +162,7 @@ fn first_grid_index(t: f64, period_s: f64) -> i64 {
 /// A straight path as its own curve type, so that the sampling loop of a line is compiled
 /// for lines: p' is then a loop constant and p'' zero, and the compiler hoists |p'| out of the
 /// Taylor step. The same stepping law as every other curve.
+#[derive(Clone, Copy)]
 struct Line {
     start: Vec3,
     delta: Vec3,
@@ -142,12 +180,12 @@ impl Curve for Line {
 }
 
 /// The common body: emits the move's samples over [t0, t_end] with the given junction
-/// impulse (acceleration to add at time t), dispatching once on the kind of path.
+/// impulses, dispatching once on the kind of path.
 fn sample_span(
     mv: &PlannedMove,
     t_end: f64,
     period_s: f64,
-    impulse: impl Fn(f64) -> Vec3,
+    kicks: Kicks,
     out: &mut impl SampleSink,
 ) {
     match mv.path {
@@ -156,19 +194,21 @@ fn sample_span(
                 start,
                 delta: end - start,
             };
-            sample_curve(mv, &line, t_end, period_s, impulse, out)
+            sample_curve(mv, &line, Some(line), t_end, period_s, kicks, out)
         }
-        Path::Arc(_) => sample_curve(mv, &mv.path, t_end, period_s, impulse, out),
+        Path::Arc(_) => sample_curve(mv, &mv.path, None, t_end, period_s, kicks, out),
     }
 }
 
-/// Samples of `mv` along `curve` (its path).
+/// Samples of `mv` along `curve` (its path; `straight` too when it is a line, whose plain
+/// grid samples then go to the sink a run at a time).
 fn sample_curve<C: Curve>(
     mv: &PlannedMove,
     curve: &C,
+    straight: Option<Line>,
     t_end: f64,
     period_s: f64,
-    impulse: impl Fn(f64) -> Vec3,
+    kicks: Kicks,
     out: &mut impl SampleSink,
 ) {
     if !(period_s > 0.0 && period_s.is_finite()) {
@@ -228,7 +268,7 @@ fn sample_curve<C: Curve>(
     let mut w = Walker {
         mv,
         curve,
-        impulse,
+        kicks,
         out,
         u: 0.0,
         t_s: t0,
@@ -256,8 +296,36 @@ fn sample_curve<C: Curve>(
             w.start_phase(&law);
             continue;
         }
+        let next_bound = bounds[..nb].get(b).copied().flatten();
+        // The grid points before the next boundary, away from the junctions, of a line: a
+        // run for the sink (the same samples, at once).
+        if let Some(line) = straight
+            && mv.kinematic
+            && k as f64 * period_s >= kicks.calm_from_s
+        {
+            let limit = next_bound.map_or(t_end, |l| l.t_s).min(kicks.calm_to_s);
+            let k_end = first_grid_index(limit, period_s);
+            if k_end > k {
+                let run = LineRun {
+                    mv,
+                    line,
+                    frame: Frame::new(&line.jet(0.0)),
+                    law,
+                    from: w.from,
+                    from_t_s: w.from_t_s,
+                    k0: k as f64,
+                    period_s,
+                    len: (k_end - k) as usize,
+                };
+                for j in 0..run.len {
+                    w.out.sample(run.sample(j));
+                }
+                w.step_to((k_end - 1) as f64 * period_s);
+                k = k_end;
+            }
+        }
         let tg = k as f64 * period_s;
-        match bounds[..nb].get(b).copied().flatten() {
+        match next_bound {
             Some(next_law) if next_law.t_s <= tg => {
                 t = next_law.t_s;
                 right = Some(next_law);
@@ -285,10 +353,10 @@ fn sample_curve<C: Curve>(
 /// paths G-code has (lines, circular and helical arcs) the step is exact at any length (see
 /// [`TaylorStep`]), so the two give the same positions, but steps from a fixed point do not
 /// wait for one another (and do not accumulate rounding).
-struct Walker<'a, C, I, O> {
+struct Walker<'a, C, O> {
     mv: &'a PlannedMove,
     curve: &'a C,
-    impulse: I,
+    kicks: Kicks,
     out: &'a mut O,
     u: f64,
     t_s: f64,
@@ -297,30 +365,18 @@ struct Walker<'a, C, I, O> {
     from_t_s: f64,
 }
 
-impl<C: Curve, I: Fn(f64) -> Vec3, O: SampleSink> Walker<'_, C, I, O> {
+impl<C: Curve, O: SampleSink> Walker<'_, C, O> {
     /// Emits the sample at the current time under `law`.
     #[inline(always)]
     fn emit(&mut self, law: &PhaseLaw) {
         let t = self.t_s;
-        let (vel, acc) = if self.mv.kinematic {
-            motion(&self.jet, law.speed(t), law.a_mm_s2)
+        let motion = if self.mv.kinematic {
+            Frame::new(&self.jet).motion(law.speed(t), law.a_mm_s2)
         } else {
             (Vec3::zeros(), Vec3::zeros())
         };
-        let kick = (self.impulse)(t);
-        let phase = if kick.norm_squared() <= CORNER_MIN_MM_S2 * CORNER_MIN_MM_S2 {
-            law.phase
-        } else {
-            Phase::Corner
-        };
-        self.out.sample(Sample {
-            t_s: t,
-            line: self.mv.line,
-            phase,
-            pos_mm: self.jet.p,
-            vel_mm_s: vel,
-            acc_mm_s2: acc + kick,
-        });
+        let s = sample_at(self.mv, t, self.jet.p, motion, law, self.kicks.at(t));
+        self.out.sample(s);
     }
 
     /// Starts the phase of `law` at the current time and position.
@@ -338,6 +394,62 @@ impl<C: Curve, I: Fn(f64) -> Vec3, O: SampleSink> Walker<'_, C, I, O> {
             self.jet = self.curve.jet(self.u);
         }
         self.t_s = t;
+    }
+}
+
+/// The sample of `mv` at time `t` and position `pos`, moving with `motion` (velocity,
+/// acceleration) in the phase of `law`, plus the junction impulse `kick`: the one formula of
+/// every sample.
+#[inline(always)]
+fn sample_at(
+    mv: &PlannedMove,
+    t: f64,
+    pos: Vec3,
+    motion: (Vec3, Vec3),
+    law: &PhaseLaw,
+    kick: Vec3,
+) -> Sample {
+    let phase = if kick.norm_squared() <= CORNER_MIN_MM_S2 * CORNER_MIN_MM_S2 {
+        law.phase
+    } else {
+        Phase::Corner
+    };
+    Sample {
+        t_s: t,
+        line: mv.line,
+        phase,
+        pos_mm: pos,
+        vel_mm_s: motion.0,
+        acc_mm_s2: motion.1 + kick,
+    }
+}
+
+/// Consecutive grid samples of a straight move, all in one phase and away from its
+/// junctions: sample j is at t = (k0 + j)·Ts. Each is what the move's walk gives at that
+/// time (the same formula), in a loop with no branch and nothing to recompute but the
+/// time, the parameter and the speed (the tangent is the run's constant).
+struct LineRun<'a> {
+    mv: &'a PlannedMove,
+    line: Line,
+    frame: Frame,
+    law: PhaseLaw,
+    from: TaylorStep,
+    from_t_s: f64,
+    /// Grid index of the first sample, as a float (exact below 2⁵³).
+    k0: f64,
+    period_s: f64,
+    len: usize,
+}
+
+impl LineRun<'_> {
+    /// Sample j of the run (j < len).
+    #[inline(always)]
+    fn sample(&self, j: usize) -> Sample {
+        let t = (self.k0 + j as f64) * self.period_s;
+        let u = self.from.at(t - self.from_t_s);
+        let law = &self.law;
+        let motion = self.frame.motion(law.speed(t), law.a_mm_s2);
+        sample_at(self.mv, t, self.line.jet(u).p, motion, law, Vec3::zeros())
     }
 }
 
@@ -408,6 +520,72 @@ mod tests {
             z_start_mm: 0.2,
             z_delta_mm: 0.0,
         })
+    }
+
+    #[test]
+    fn runs_of_a_line_are_the_samples_of_its_walk() {
+        // The bulk loop over a line's plain grid points against the walk one sample at a
+        // time (the path every arc takes): the same samples, bit for bit. Junctions with
+        // and without a bend, all three phases, a move after a pause.
+        let p = |x: f64, y: f64| Vec3::new(x, y, 0.3);
+        let a = planned(
+            Path::line(p(0.0, 0.0), p(40.0, 0.0)),
+            0.012_3,
+            0.0,
+            120.0,
+            30.0,
+            3000.0,
+        );
+        let b = planned(
+            Path::line(p(40.0, 0.0), p(40.0, 25.0)),
+            a.t0_s + a.duration_s(),
+            30.0,
+            90.0,
+            0.0,
+            3000.0,
+        );
+        let c = planned(
+            Path::line(p(40.0, 25.0), p(10.0, 25.0)),
+            b.t0_s + b.duration_s() + 0.2,
+            0.0,
+            100.0,
+            0.0,
+            1e4,
+        );
+        let moves = [a, b, c];
+        let mut runs = 0;
+        for i in 0..moves.len() {
+            let (prev, mv, next) = (
+                i.checked_sub(1).map(|j| &moves[j]),
+                &moves[i],
+                moves.get(i + 1),
+            );
+            let (t_end, kicks) = span(prev, mv, next, TS);
+            let Path::Line { start, end } = mv.path else {
+                unreachable!()
+            };
+            let line = Line {
+                start,
+                delta: end - start,
+            };
+            let (mut bulk, mut walk) = (Vec::new(), Vec::new());
+            sample_curve(mv, &line, Some(line), t_end, TS, kicks, &mut |s| {
+                bulk.push(s)
+            });
+            sample_curve(mv, &line, None, t_end, TS, kicks, &mut |s| walk.push(s));
+            assert!(bulk.len() > 20, "move {i}: {} samples", bulk.len());
+            assert_eq!(bulk.len(), walk.len());
+            for (x, y) in bulk.iter().zip(&walk) {
+                assert_eq!(x, y);
+                for k in 0..3 {
+                    assert_eq!(x.pos_mm[k].to_bits(), y.pos_mm[k].to_bits());
+                    assert_eq!(x.vel_mm_s[k].to_bits(), y.vel_mm_s[k].to_bits());
+                    assert_eq!(x.acc_mm_s2[k].to_bits(), y.acc_mm_s2[k].to_bits());
+                }
+            }
+            runs += 1;
+        }
+        assert_eq!(runs, 3);
     }
 
     #[test]
