@@ -528,31 +528,18 @@ mod tests {
         // time (the path every arc takes): the same samples, bit for bit. Junctions with
         // and without a bend, all three phases, a move after a pause.
         let p = |x: f64, y: f64| Vec3::new(x, y, 0.3);
-        let a = planned(
-            Path::line(p(0.0, 0.0), p(40.0, 0.0)),
-            0.012_3,
-            0.0,
-            120.0,
-            30.0,
-            3000.0,
-        );
-        let b = planned(
-            Path::line(p(40.0, 0.0), p(40.0, 25.0)),
-            a.t0_s + a.duration_s(),
-            30.0,
-            90.0,
-            0.0,
-            3000.0,
-        );
-        let c = planned(
-            Path::line(p(40.0, 25.0), p(10.0, 25.0)),
-            b.t0_s + b.duration_s() + 0.2,
-            0.0,
-            100.0,
-            0.0,
-            1e4,
-        );
-        let moves = [a, b, c];
+        // (end point, pause before, start, cruise and end speeds, acceleration)
+        let legs = [
+            (p(40.0, 0.0), 0.012_3, [0.0, 120.0, 30.0], 3000.0),
+            (p(40.0, 25.0), 0.0, [30.0, 90.0, 0.0], 3000.0),
+            (p(10.0, 25.0), 0.2, [0.0, 100.0, 0.0], 1e4),
+        ];
+        let (mut from, mut t) = (p(0.0, 0.0), 0.0);
+        let moves = legs.map(|(to, pause, [vs, vc, ve], acc)| {
+            let mv = planned(Path::line(from, to), t + pause, vs, vc, ve, acc);
+            (from, t) = (to, mv.t0_s + mv.duration_s());
+            mv
+        });
         let mut runs = 0;
         for i in 0..moves.len() {
             let (prev, mv, next) = (
