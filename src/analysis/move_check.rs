@@ -244,7 +244,7 @@ impl Scratch {
 
     /// Runs the model over the block and empties it into the results, a move's run of
     /// samples at a time. `window_s`: keep the forces of the samples in this span (s).
-    #[inline(never)] // keeps the per-sample closure small enough to be inlined
+    #[inline(never)] // keeps the sink's per-sample method small in the sampling loop
     fn flush(&mut self, model: &DeltaModel, window_s: (f64, f64), out: &mut [MoveResult]) {
         let n = self.len;
         self.len = 0;

@@ -59,8 +59,8 @@ impl DeltaModel {
     /// and Jx⁻ᵀ comes from the cross products of Jx's rows (the arm vectors), so nothing is
     /// factorised or allocated.
     #[inline(always)]
-    fn core(&self, pos_mm: [f64; 3], v: [f64; 3], a: [f64; 3]) -> Core {
-        let p = [pos_mm[0], pos_mm[1], pos_mm[2] + self.nozzle_offset_mm];
+    fn core(&self, pos_mm: Vec3, v: [f64; 3], a: [f64; 3]) -> Core {
+        let p = self.platform_mm(pos_mm);
         let radicand = self.radicands(p);
         // Clamped so that an unreachable lane computes finite garbage, flagged by `ok`.
         let q = [
@@ -140,11 +140,11 @@ impl DeltaModel {
     ) -> Result<DynState, Unreachable> {
         let v = [vel_mm_s.x, vel_mm_s.y, vel_mm_s.z];
         let a = [acc_mm_s2.x, acc_mm_s2.y, acc_mm_s2.z];
-        let c = self.core([pos_mm.x, pos_mm.y, pos_mm.z], v, a);
+        let c = self.core(pos_mm, v, a);
         if !c.ok {
             return Err(self.why_not(pos_mm, vel_mm_s, acc_mm_s2));
         }
-        let (q, dq, p_z) = (c.q, c.dq, pos_mm.z + self.nozzle_offset_mm);
+        let (q, dq, p_z) = (c.q, c.dq, self.platform_mm(pos_mm)[2]);
         let (mi, mw, mp, g) = (
             self.carriage_inertia_kg,
             self.carriage_weight_kg,
@@ -226,7 +226,7 @@ impl DeltaModel {
     fn forces_block_generic(&self, s: &StateBlock, lanes: usize, out: &mut ForceBlock) {
         for j in 0..lanes.min(BLOCK) {
             let c = self.core(
-                [s.pos_mm[0][j], s.pos_mm[1][j], s.pos_mm[2][j]],
+                Vec3::new(s.pos_mm[0][j], s.pos_mm[1][j], s.pos_mm[2][j]),
                 [s.vel_mm_s[0][j], s.vel_mm_s[1][j], s.vel_mm_s[2][j]],
                 [s.acc_mm_s2[0][j], s.acc_mm_s2[1][j], s.acc_mm_s2[2][j]],
             );

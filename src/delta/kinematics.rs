@@ -34,6 +34,7 @@ pub(super) fn cofactors(r: &[[f64; 3]; 3]) -> ([[f64; 3]; 3], f64) {
 
 impl DeltaModel {
     /// Platform centre P of a nozzle position, mm.
+    #[inline(always)]
     pub(super) fn platform_mm(&self, nozzle_mm: Vec3) -> [f64; 3] {
         [
             nozzle_mm.x,

@@ -121,13 +121,6 @@ impl Frame {
     }
 }
 
-/// Velocity and acceleration of a nozzle where the curve's derivatives are `jet`:
-/// [`Frame::motion`].
-#[inline(always)]
-pub fn motion(jet: &Jet, v_mm_s: f64, a_t_mm_s2: f64) -> (Vec3, Vec3) {
-    Frame::new(jet).motion(v_mm_s, a_t_mm_s2)
-}
-
 /// The paper's Lissajous path (eq. 18): x = x0·sin(ω_x·u + φ_x), y = y0·sin(ω_y·u + φ_y),
 /// z constant.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -262,7 +255,7 @@ mod tests {
         assert_eq!(taylor_step(&line.jet(0.99), 0.99, 100.0, 0.0, 1.0), 1.0);
         let point = Path::line(Vec3::zeros(), Vec3::zeros());
         assert_eq!(taylor_step(&point.jet(0.3), 0.3, 100.0, 10.0, 1.0), 0.3);
-        let (v, a) = motion(&point.jet(0.3), 100.0, 10.0);
+        let (v, a) = Frame::new(&point.jet(0.3)).motion(100.0, 10.0);
         assert_eq!((v, a), (Vec3::zeros(), Vec3::zeros()));
     }
 
@@ -287,7 +280,7 @@ mod tests {
         for &u in &[0.05, 0.21, 0.4, 0.63, 0.9] {
             let (d1, d2) = (c.d1(u), c.d2(u));
             let kappa = d1.cross(&d2).norm() / d1.norm().powi(3);
-            let (vel, acc) = motion(&c.jet(u), v, at);
+            let (vel, acc) = Frame::new(&c.jet(u)).motion(v, at);
             let t = d1.normalize();
             assert!((vel - t * v).norm() < 1e-12 * v);
             assert!((acc.dot(&t) - at).abs() < 1e-9 * at.abs());

@@ -7,7 +7,7 @@ use crate::path::Vec3;
 pub mod curve;
 mod sampler;
 
-pub use curve::{Curve, Frame, Lissajous, TaylorStep, motion, taylor_step, walk_constant_speed};
+pub use curve::{Curve, Frame, Lissajous, TaylorStep, taylor_step, walk_constant_speed};
 pub use sampler::sample_move;
 
 /// Where in its move a sample lies.
