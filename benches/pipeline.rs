@@ -7,7 +7,7 @@ use std::path::Path;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 use delta_gcode::analysis::{MoveChecker, RunOptions, Scratch};
-use delta_gcode::delta::{BLOCK, DeltaModel, ForceBlock, StateBlock};
+use delta_gcode::delta::{BLOCK, ForceBlock, StateBlock};
 use delta_gcode::gcode::{Event, interpret};
 use delta_gcode::machine::Machine;
 use delta_gcode::path::Vec3;
@@ -40,7 +40,7 @@ fn plan(machine: &Machine, events: &[Event]) -> Vec<PlannedMove> {
 fn bench(c: &mut Criterion) {
     let (machine, events) = setup();
     let moves = plan(&machine, &events);
-    let model = DeltaModel::new(&machine);
+    let model = machine.model();
     let period = machine.sampling.period_s;
 
     let mut g = c.benchmark_group("planner");

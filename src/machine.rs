@@ -5,7 +5,7 @@ use std::path::Path;
 
 use serde::Deserialize;
 
-use crate::delta::DeltaModel;
+use crate::delta::{self, DeltaModel, TOWER_NAMES};
 use crate::path::Vec3;
 
 /// Delta geometry, mm and degrees.
@@ -144,6 +144,28 @@ impl Machine {
         })
     }
 
+    /// The dynamic model of this machine's robot (the paper's, eq. 2-20).
+    pub fn model(&self) -> DeltaModel {
+        let g = &self.geometry;
+        let m = &self.masses;
+        DeltaModel::new(
+            &delta::Geometry {
+                delta_radius_mm: g.delta_radius_mm,
+                arm_length_mm: g.arm_length_mm,
+                nozzle_offset_mm: g.nozzle_offset_mm,
+                tower_angles_deg: g.tower_angles_deg,
+                home_z_mm: g.home_z_mm,
+            },
+            &delta::Masses {
+                cart_kg: m.cart_kg,
+                link_kg: m.link_kg,
+                platform_kg: m.platform_kg,
+                rotor_reflected_kg: self.motors.reflected_mass_kg,
+            },
+            self.gravity_m_s2,
+        )
+    }
+
     /// Klipper's delta edge limit (`kinematics/delta.py`, `ratio_to_xy` with
     /// half_min_step_dist = 0): the nozzle radius beyond which some carriage can move
     /// `ratio` times faster than the nozzle, ratio·√(l²/(ratio²+1)) − delta_radius, with the
@@ -262,7 +284,7 @@ impl Machine {
                 format!("home must be above the bed (z > 0), found {}", g.home_z_mm),
             );
         }
-        if let Err(e) = DeltaModel::new(self).inverse(Vec3::new(0.0, 0.0, g.home_z_mm)) {
+        if let Err(e) = self.model().inverse(Vec3::new(0.0, 0.0, g.home_z_mm)) {
             return err("geometry.home_z_mm", format!("home is unreachable: {e}"));
         }
         Ok(())
@@ -272,9 +294,6 @@ impl Machine {
 /// The sampling periods a profile may ask for, s (1 µs to 1 s).
 const MIN_PERIOD_S: f64 = 1e-6;
 const MAX_PERIOD_S: f64 = 1.0;
-
-/// Tower names in order (towers 1, 2, 3 of the paper).
-pub const TOWER_NAMES: [char; 3] = ['A', 'B', 'C'];
 
 /// Turns a serde_yaml error into a [`ProfileError::Schema`], adding the closest valid name
 /// to an unknown key.
@@ -726,6 +745,31 @@ impl RawMachine {
     }
 }
 
+/// A machine for the unit tests of the stages after the profile.
+#[cfg(test)]
+pub(crate) mod test_support {
+    use super::Machine;
+
+    /// A Kossel-like machine with slightly unequal arms and a nozzle offset, so no test
+    /// passes by symmetry, and the paper's masses.
+    pub(crate) const KOSSEL_YAML: &str = "
+name: test kossel
+geometry:
+  delta_radius_mm: 105
+  arm_length_mm: [215.0, 215.5, 214.5]
+  nozzle_offset_mm: 3
+  home_z_mm: 290
+  print_radius_mm: 85
+masses: {cart_kg: 0.25, link_kg: 0.02, platform_kg: 0.5}
+limits: {max_velocity_mm_s: 300, max_accel_mm_s2: 3000}
+motors: {max_force_n: 30}
+";
+
+    pub(crate) fn kossel_machine() -> Machine {
+        Machine::from_yaml_str(KOSSEL_YAML, "test").unwrap()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -996,7 +1040,7 @@ motors: {max_force_n: 20}
         let rotor = Machine::from_yaml_str(&rotor, "p").unwrap();
         let m_r = rotor.motors.reflected_mass_kg;
         assert!(m_r > 0.13);
-        (DeltaModel::new(&plain), DeltaModel::new(&rotor), m_r)
+        (plain.model(), rotor.model(), m_r)
     }
 
     #[test]
@@ -1093,5 +1137,35 @@ motors: {max_force_n: 20}
         assert_eq!(edit_distance("kitten", "sitting"), 3);
         assert_eq!(edit_distance("", "abc"), 3);
         assert_eq!(edit_distance("same", "same"), 0);
+    }
+    #[test]
+    fn slow_radius_is_where_a_carriage_moves_ratio_times_faster() {
+        // Nozzle on the far side of tower C (−y), moving away from it: the fastest
+        // carriage-to-nozzle speed ratio at that radius.
+        let machine = test_support::kossel_machine();
+        let m = machine.model();
+        for ratio in [3.0, 6.0] {
+            let r = machine.slow_radius_mm(ratio);
+            // Shortest arm (214.5 mm) is tower C's in the fixture.
+            let s = m
+                .evaluate(
+                    Vec3::new(0.0, -r, 0.0),
+                    Vec3::new(0.0, -1.0, 0.0),
+                    Vec3::zeros(),
+                )
+                .unwrap();
+            assert!(
+                (s.dq_mm_s[2].abs() - ratio).abs() < 1e-9,
+                "{ratio}: {:?}",
+                s.dq_mm_s
+            );
+            // The same ratio in closed form, from the distance to tower C's pull point.
+            let c = m.towers_xy_mm()[2];
+            let h = (c[0] * c[0] + (c[1] + r).powi(2)).sqrt();
+            assert!((m.carriage_speed_ratio(2, h) - ratio).abs() < 1e-9);
+        }
+        assert_eq!(m.carriage_speed_ratio(2, 214.5), f64::INFINITY);
+        // Hand-computed: 3·√(214.5²/10) − 105.
+        assert!((machine.slow_radius_mm(3.0) - 98.492_567).abs() < 1e-5);
     }
 }

@@ -5,7 +5,6 @@
 mod common;
 
 use common::*;
-use delta_gcode::delta::DeltaModel;
 use delta_gcode::machine::Machine;
 use delta_gcode::path::Vec3;
 
@@ -31,7 +30,7 @@ fn trapezoid(a: Vec3, b: Vec3, v: f64, acc: f64, t: f64) -> (Vec3, Vec3, Vec3) {
 fn rest_to_rest_peaks_equal_a_dense_evaluation() {
     let machine_path = repo("machines/kossel.yaml");
     let machine = Machine::load(&machine_path).unwrap();
-    let model = DeltaModel::new(&machine);
+    let model = machine.model();
     let acc = machine.limits.max_accel_mm_s2;
     // Long moves at 100 mm/s: each reaches its cruise speed (1.67 mm to accelerate).
     let points = [

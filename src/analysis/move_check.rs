@@ -32,7 +32,7 @@ impl<'m> MoveChecker<'m> {
     pub fn new(machine: &'m Machine, options: RunOptions) -> Self {
         MoveChecker {
             machine,
-            model: DeltaModel::new(machine),
+            model: machine.model(),
             options,
         }
     }
@@ -320,8 +320,8 @@ fn unreachable(e: Unreachable, t_s: f64, pos: Vec3) -> Problem {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::delta::test_support::kossel_machine;
     use crate::gcode::interpret;
+    use crate::machine::test_support::kossel_machine;
     use crate::planner::Planner;
 
     fn plan(machine: &Machine, gcode: &str) -> Vec<PlannedMove> {

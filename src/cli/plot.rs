@@ -157,7 +157,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let model = match &args.energy_slope {
         Some(path) => {
             let machine = Machine::load(path)?;
-            Some((DeltaModel::new(&machine), machine.sampling.period_s))
+            Some((machine.model(), machine.sampling.period_s))
         }
         None => None,
     };
@@ -321,7 +321,7 @@ mod tests {
         // model's power to the truncation of a 2 ms central difference.
         let text = include_str!("../../machines/paper.yaml");
         let machine = Machine::from_yaml_str(text, "paper").unwrap();
-        let model = DeltaModel::new(&machine);
+        let model = machine.model();
         let mut cols: Vec<Vec<f64>> = vec![Vec::new(); STATE_COLUMNS.len()];
         let mut power = Vec::new();
         for k in 0..400 {

@@ -7,8 +7,8 @@ use std::process::ExitCode;
 use anyhow::Context;
 use serde_json::json;
 
-use crate::delta::DeltaModel;
-use crate::machine::{Machine, TOWER_NAMES};
+use crate::delta::TOWER_NAMES;
+use crate::machine::Machine;
 use crate::path::Vec3;
 
 /// Output format of the model commands.
@@ -68,7 +68,7 @@ fn parse_triple(s: &str) -> Result<[f64; 3], String> {
 
 pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let machine = Machine::load(&args.machine)?;
-    let model = DeltaModel::new(&machine);
+    let model = machine.model();
     if let Some(q) = args.carriages {
         let p = model
             .forward(q)

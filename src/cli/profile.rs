@@ -6,8 +6,8 @@ use std::process::ExitCode;
 use serde_json::json;
 
 use super::pose::Format;
-use crate::delta::DeltaModel;
-use crate::machine::{Machine, TOWER_NAMES};
+use crate::delta::TOWER_NAMES;
+use crate::machine::Machine;
 use crate::path::Vec3;
 
 #[derive(clap::Args, Debug)]
@@ -38,7 +38,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         (None, None) => anyhow::bail!("a machine profile (M.yaml) is required"),
     };
     let machine = Machine::load(profile)?;
-    let model = DeltaModel::new(&machine);
+    let model = machine.model();
     let g = &machine.geometry;
     let centre = model.static_forces_n(Vec3::zeros())?;
     let (max_static, max_at, max_tower) = model

@@ -286,14 +286,18 @@ impl Default for ForceBlock {
 mod tests {
     use nalgebra::{Matrix3, Matrix6, Vector6};
 
-    use super::super::test_support::{Rng, kossel, kossel_machine, workspace_points};
+    use super::super::Geometry;
+    use super::super::test_support::{
+        GRAVITY_M_S2, KOSSEL, PAPER_MASSES, Rng, kossel, workspace_points,
+    };
     use super::*;
-    use crate::machine::Machine;
 
     fn paper_equal_arms() -> DeltaModel {
-        let mut m: Machine = kossel_machine();
-        m.geometry.arm_length_mm = [215.0; 3];
-        DeltaModel::new(&m)
+        let g = Geometry {
+            arm_length_mm: [215.0; 3],
+            ..KOSSEL
+        };
+        DeltaModel::new(&g, &PAPER_MASSES, GRAVITY_M_S2)
     }
 
     /// Nozzle on the parabola p0 + v t + a t²/2 and its carriage heights by eq. 6 alone.
@@ -632,41 +636,5 @@ mod tests {
             assert_eq!(base.energy_residual_w[j].to_bits(), residual.to_bits());
         }
         assert!(bad >= 4 * (len / 16), "{bad} invalid lanes");
-    }
-
-    /// `cargo test --release -- --ignored evaluate_speed --nocapture`
-    #[test]
-    #[ignore]
-    fn evaluate_speed() {
-        let m = kossel();
-        let states = random_states(1000);
-        let rounds = 10_000;
-        // CPU time of this thread (ns), so a loaded machine does not inflate the figure.
-        let cpu_ns = || {
-            std::fs::read_to_string("/proc/thread-self/schedstat")
-                .ok()
-                .and_then(|s| s.split_whitespace().next()?.parse::<f64>().ok())
-        };
-        let cpu0 = cpu_ns();
-        let start = std::time::Instant::now();
-        let mut acc = 0.0;
-        for _ in 0..rounds {
-            for &(p, v, a) in &states {
-                let s = m.evaluate(std::hint::black_box(p), v, a);
-                acc += s.map_or(0.0, |s| s.force_n[0]);
-            }
-        }
-        let calls = (rounds * states.len()) as f64;
-        let ns = start.elapsed().as_nanos() as f64 / calls;
-        let cpu = cpu0.zip(cpu_ns()).map(|(a, b)| (b - a) / calls);
-        println!("evaluate: {ns:.1} ns per call wall, {cpu:.1?} ns CPU ({acc})");
-        let cpu0 = cpu_ns();
-        for _ in 0..rounds {
-            for &(p, _, _) in &states {
-                acc += m.inverse(std::hint::black_box(p)).map_or(0.0, |q| q[0]);
-            }
-        }
-        let cpu = cpu0.zip(cpu_ns()).map(|(a, b)| (b - a) / calls);
-        println!("inverse: {cpu:.1?} ns CPU ({acc})");
     }
 }

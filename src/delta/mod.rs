@@ -12,7 +12,36 @@ mod statics;
 
 pub use dynamics::{BLOCK, DynState, ForceBlock, StateBlock};
 
-use crate::machine::{Machine, TOWER_NAMES};
+/// Tower names in order (towers 1, 2, 3 of the paper).
+pub const TOWER_NAMES: [char; 3] = ['A', 'B', 'C'];
+
+/// The robot's geometry as the model needs it, mm and degrees.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Geometry {
+    /// Horizontal distance from the Z axis to a tower's carriage joint line, less the
+    /// effector's joint offset: (s_B − s_P)/√3 in the paper.
+    pub delta_radius_mm: f64,
+    /// Arm length l per tower (A, B, C).
+    pub arm_length_mm: [f64; 3],
+    /// PQ: nozzle tip below the platform centre P.
+    pub nozzle_offset_mm: f64,
+    /// Tower angles (A, B, C); the paper's are 210°, 330°, 90°.
+    pub tower_angles_deg: [f64; 3],
+    /// Nozzle z after G28 at x = y = 0: the carriages are then at the top of their travel.
+    pub home_z_mm: f64,
+}
+
+/// The lumped masses of Fig. 2, kg, and what the motors add to the carriages' inertia.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Masses {
+    pub cart_kg: f64,
+    /// Each of the six arms.
+    pub link_kg: f64,
+    /// Effector + hotend.
+    pub platform_kg: f64,
+    /// A motor rotor's inertia seen at its carriage, J/r², kg: inertia, not weight.
+    pub rotor_reflected_kg: f64,
+}
 
 /// Why a nozzle position or a set of carriage heights has no configuration.
 #[derive(Clone, Copy, Debug, PartialEq, thiserror::Error)]
@@ -89,9 +118,7 @@ pub struct DeltaModel {
 }
 
 impl DeltaModel {
-    pub fn new(machine: &Machine) -> DeltaModel {
-        let g = &machine.geometry;
-        let m = &machine.masses;
+    pub fn new(g: &Geometry, m: &Masses, gravity_m_s2: f64) -> DeltaModel {
         let towers_mm = g.tower_angles_deg.map(|a| {
             let (s, c) = a.to_radians().sin_cos();
             [g.delta_radius_mm * c, g.delta_radius_mm * s]
@@ -104,9 +131,9 @@ impl DeltaModel {
             nozzle_offset_mm: g.nozzle_offset_mm,
             top_mm: [f64::INFINITY; 3],
             carriage_weight_kg: m.cart_kg + m.link_kg,
-            carriage_inertia_kg: m.cart_kg + m.link_kg + machine.motors.reflected_mass_kg,
+            carriage_inertia_kg: m.cart_kg + m.link_kg + m.rotor_reflected_kg,
             platform_kg: m.platform_kg + 3.0 * m.link_kg,
-            gravity_m_s2: machine.gravity_m_s2,
+            gravity_m_s2,
             singular_det_mm3: 1e-9 * g.arm_length_mm.iter().product::<f64>(),
         };
         // With an infinite top the inverse cannot fail on AboveTop; an arm too short for

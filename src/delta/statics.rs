@@ -85,7 +85,7 @@ impl DeltaModel {
 
 #[cfg(test)]
 mod tests {
-    use super::super::test_support::{kossel, kossel_machine};
+    use super::super::test_support::kossel;
     use super::*;
 
     /// Whether every point of the circle of `r` at height `z` is reachable (brute force).
@@ -118,37 +118,6 @@ mod tests {
             assert!(z > 0.0 && z < 290.0);
             assert!((m.reachable_radius_mm(z) - r).abs() < 1e-6, "r {r} z {z}");
         }
-    }
-
-    #[test]
-    fn slow_radius_is_where_a_carriage_moves_ratio_times_faster() {
-        // Nozzle on the far side of tower C (−y), moving away from it: the fastest
-        // carriage-to-nozzle speed ratio at that radius.
-        let machine = kossel_machine();
-        let m = DeltaModel::new(&machine);
-        for ratio in [3.0, 6.0] {
-            let r = machine.slow_radius_mm(ratio);
-            // Shortest arm (214.5 mm) is tower C's in the fixture.
-            let s = m
-                .evaluate(
-                    Vec3::new(0.0, -r, 0.0),
-                    Vec3::new(0.0, -1.0, 0.0),
-                    Vec3::zeros(),
-                )
-                .unwrap();
-            assert!(
-                (s.dq_mm_s[2].abs() - ratio).abs() < 1e-9,
-                "{ratio}: {:?}",
-                s.dq_mm_s
-            );
-            // The same ratio in closed form, from the distance to tower C's pull point.
-            let c = m.towers_xy_mm()[2];
-            let h = (c[0] * c[0] + (c[1] + r).powi(2)).sqrt();
-            assert!((m.carriage_speed_ratio(2, h) - ratio).abs() < 1e-9);
-        }
-        assert_eq!(m.carriage_speed_ratio(2, 214.5), f64::INFINITY);
-        // Hand-computed: 3·√(214.5²/10) − 105.
-        assert!((machine.slow_radius_mm(3.0) - 98.492_567).abs() < 1e-5);
     }
 
     #[test]

@@ -1,30 +1,30 @@
 //! Shared fixtures for the model's unit tests.
 
-use super::DeltaModel;
-use crate::machine::Machine;
+use super::{DeltaModel, Geometry, Masses};
 use crate::path::Vec3;
 
-/// A Kossel-like machine with slightly unequal arms and a nozzle offset, so no test
-/// passes by symmetry, and the paper's masses.
-pub(crate) const KOSSEL_YAML: &str = "
-name: test kossel
-geometry:
-  delta_radius_mm: 105
-  arm_length_mm: [215.0, 215.5, 214.5]
-  nozzle_offset_mm: 3
-  home_z_mm: 290
-  print_radius_mm: 85
-masses: {cart_kg: 0.25, link_kg: 0.02, platform_kg: 0.5}
-limits: {max_velocity_mm_s: 300, max_accel_mm_s2: 3000}
-motors: {max_force_n: 30}
-";
+/// A Kossel-like robot with slightly unequal arms and a nozzle offset, so no test passes by
+/// symmetry.
+pub(crate) const KOSSEL: Geometry = Geometry {
+    delta_radius_mm: 105.0,
+    arm_length_mm: [215.0, 215.5, 214.5],
+    nozzle_offset_mm: 3.0,
+    tower_angles_deg: [210.0, 330.0, 90.0],
+    home_z_mm: 290.0,
+};
 
-pub(crate) fn kossel_machine() -> Machine {
-    Machine::from_yaml_str(KOSSEL_YAML, "test").unwrap()
-}
+/// The paper's masses (section 5), no rotor.
+pub(crate) const PAPER_MASSES: Masses = Masses {
+    cart_kg: 0.25,
+    link_kg: 0.02,
+    platform_kg: 0.5,
+    rotor_reflected_kg: 0.0,
+};
+
+pub(crate) const GRAVITY_M_S2: f64 = 9.81;
 
 pub(crate) fn kossel() -> DeltaModel {
-    DeltaModel::new(&kossel_machine())
+    DeltaModel::new(&KOSSEL, &PAPER_MASSES, GRAVITY_M_S2)
 }
 
 /// Points over the print disc (radius 85) from the bed up to 200 mm.

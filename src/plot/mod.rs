@@ -16,7 +16,7 @@ pub use bed::{bed_map_string, bed_map_svg};
 pub use chart::{HLine, LineChart, Series, line_chart_string};
 pub use trace_csv::read_trace_columns;
 
-use crate::machine::TOWER_NAMES;
+use crate::delta::TOWER_NAMES;
 
 /// Writes a [`LineChart`] to `path` as SVG.
 pub fn line_chart_svg(path: &Path, chart: &LineChart) -> anyhow::Result<()> {

@@ -3,7 +3,7 @@
 use std::collections::BTreeMap;
 
 use super::{Report, Violation, format_forces};
-use crate::machine::TOWER_NAMES;
+use crate::delta::TOWER_NAMES;
 
 /// Where and when a violation happened: `(tower A, decel, t=812.304 s)`.
 pub(super) fn context(v: &Violation) -> String {

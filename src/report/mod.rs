@@ -13,8 +13,8 @@ pub use text::write_text;
 
 use serde::Serialize;
 
+use crate::delta::TOWER_NAMES;
 use crate::gcode::{Diagnostic, Severity};
-use crate::machine::TOWER_NAMES;
 use crate::resample::Phase;
 
 /// At most this many violations and diagnostics are kept in detail; all are counted.

@@ -3,7 +3,7 @@
 use std::io::{self, Write};
 
 use super::{Report, format_forces};
-use crate::machine::TOWER_NAMES;
+use crate::delta::TOWER_NAMES;
 
 /// How many of the worst moves the text report lists.
 const WORST_SHOWN: usize = 10;
