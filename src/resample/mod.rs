@@ -5,7 +5,9 @@
 use crate::path::Vec3;
 
 pub mod curve;
+mod junction;
 mod sampler;
+mod schedule;
 
 pub use curve::{Curve, Frame, Lissajous, TaylorStep, taylor_step, walk_constant_speed};
 pub use sampler::sample_move;
