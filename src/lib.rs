@@ -1,12 +1,12 @@
 //! delta-gcode: plans slicer G-code the way Klipper does and runs the Lagrangian dynamic
 //! model of a prismatic delta robot over it, to find the force each carriage motor must give.
 //!
-//! Pipeline (one module per stage, joined only by plain data types):
+//! The command line is the binary's (`src/main.rs`, `src/cli`); this library is the
+//! pipeline. Pipeline (one module per stage, joined only by plain data types):
 //! `gcode` (lines → [`gcode::Event`]) → `planner` ([`planner::PlannedMove`]) →
 //! `resample` ([`resample::Sample`]) → `delta` (forces) → `report` → `emit`.
 
 pub mod analysis;
-pub mod cli;
 pub mod delta;
 pub mod emit;
 pub mod gcode;

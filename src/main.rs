@@ -1,5 +1,9 @@
+//! The `delta-gcode` command: the command line over the library's pipeline.
+
+mod cli;
+
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
-    delta_gcode::cli::main()
+    cli::main()
 }

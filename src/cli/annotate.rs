@@ -11,8 +11,8 @@ use anyhow::Context;
 use super::check::EXIT_VIOLATION;
 use super::common::{MachineArg, Progress, check_with_progress, print_diagnostics};
 use super::replace::replace_file;
-use crate::emit::emit;
-use crate::report::{annotations, summary_lines, write_json, write_text};
+use delta_gcode::emit::emit;
+use delta_gcode::report::{annotations, summary_lines, write_json, write_text};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -69,7 +69,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
             report.file,
             s.violations,
             report.machine,
-            crate::report::format_forces(&s.peak_force_n),
+            delta_gcode::report::format_forces(&s.peak_force_n),
             report.limit_force_n
         );
     } else {
@@ -77,7 +77,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
             "delta-gcode: {}: OK on {}, peak force A/B/C {} N (limit {:.1} N)",
             report.file,
             report.machine,
-            crate::report::format_forces(&s.peak_force_n),
+            delta_gcode::report::format_forces(&s.peak_force_n),
             report.limit_force_n
         );
     }

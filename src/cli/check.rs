@@ -9,15 +9,8 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use anyhow::Context;
 
-use super::common::{MachineArg, Progress, check_with_progress, print_diagnostics};
-use crate::report::{Report, write_github, write_json, write_text};
-
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Format {
-    Text,
-    Json,
-    Github,
-}
+use super::common::{Format, MachineArg, Progress, check_with_progress, print_diagnostics};
+use delta_gcode::report::{Report, write_github, write_json, write_text};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {

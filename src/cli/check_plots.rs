@@ -7,10 +7,10 @@ use std::path::Path;
 
 use anyhow::Context;
 
-use crate::analysis::{RunOptions, run};
-use crate::machine::Machine;
-use crate::plot::{bed_map_svg, force_time_svg};
-use crate::report::Report;
+use delta_gcode::analysis::{RunOptions, run};
+use delta_gcode::machine::Machine;
+use delta_gcode::plot::{bed_map_svg, force_time_svg};
+use delta_gcode::report::Report;
 
 /// Half the time span plotted around the worst moment, s.
 const HALF_WINDOW_S: f64 = 0.25;

@@ -6,14 +6,32 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 
-use crate::machine::Machine;
-use crate::report::Report;
+use delta_gcode::machine::Machine;
+use delta_gcode::report::Report;
 
 /// Files smaller than this get no progress bar: they are done before it would be seen.
 const PROGRESS_MIN_BYTES: u64 = 8 << 20;
 
 /// How many diagnostics of a file are printed to stderr; all are in the JSON report.
 const DIAGNOSTICS_SHOWN: usize = 20;
+
+/// Output formats: text for a person, JSON for scripts, GitHub Actions workflow commands
+/// for CI annotations (file reports only: `check`).
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    Text,
+    Json,
+    Github,
+}
+
+/// The `--format` values of the commands that report no file (`pose`, `machine`): text or
+/// JSON.
+pub fn text_or_json() -> impl clap::builder::TypedValueParser<Value = Format> {
+    use clap::ValueEnum;
+    use clap::builder::TypedValueParser;
+    clap::builder::PossibleValuesParser::new(["text", "json"])
+        .map(|s| Format::from_str(&s, true).unwrap_or(Format::Text))
+}
 
 /// The `--machine` option.
 #[derive(clap::Args, Debug)]
@@ -86,7 +104,7 @@ pub fn check_with_progress(
     progress: &Progress,
 ) -> anyhow::Result<Report> {
     let bar = progress.bar(path);
-    let report = crate::analysis::check_file(path, machine, all_moves, bar.as_ref())
+    let report = delta_gcode::analysis::check_file(path, machine, all_moves, bar.as_ref())
         .with_context(|| format!("checking {}", path.display()));
     if let Some(bar) = bar {
         bar.finish_and_clear();

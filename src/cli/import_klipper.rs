@@ -8,7 +8,7 @@ use std::process::ExitCode;
 use anyhow::Context;
 
 use super::replace::replace_file;
-use crate::klipper_import::{ImportExtras, import_klipper};
+use delta_gcode::klipper_import::{ImportExtras, import_klipper};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {

@@ -5,9 +5,9 @@ mod check;
 mod check_plots;
 mod common;
 mod import_klipper;
+mod machine;
 mod plot;
 mod pose;
-mod profile;
 mod replace;
 mod trace;
 
@@ -35,7 +35,7 @@ pub enum Command {
     /// The model at one nozzle state: carriages, their velocities and accelerations, forces.
     Pose(pose::Args),
     /// Validate a machine profile and print its derived figures.
-    Machine(profile::Args),
+    Machine(machine::Args),
     /// Plot trace columns (CSV from `trace`) against time as SVG.
     Plot(plot::Args),
 }
@@ -60,7 +60,7 @@ pub fn main() -> ExitCode {
         Command::Annotate(args) => annotate::run(args),
         Command::Trace(args) => trace::run(args),
         Command::Pose(args) => pose::run(args),
-        Command::Machine(args) => profile::run(args),
+        Command::Machine(args) => machine::run(args),
         Command::Plot(args) => plot::run(args),
     };
     match result {

@@ -6,10 +6,10 @@ use std::process::ExitCode;
 
 use anyhow::{Context, bail};
 
-use crate::delta::DeltaModel;
-use crate::machine::Machine;
-use crate::path::Vec3;
-use crate::plot::{HLine, LineChart, Series, line_chart_svg, read_trace_columns};
+use delta_gcode::delta::DeltaModel;
+use delta_gcode::machine::Machine;
+use delta_gcode::path::Vec3;
+use delta_gcode::plot::{HLine, LineChart, Series, line_chart_svg, read_trace_columns};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -312,7 +312,7 @@ fn energy_slope(
 mod tests {
     use super::*;
 
-    use crate::machine::Machine;
+    use delta_gcode::machine::Machine;
 
     #[test]
     fn energy_slope_matches_the_power_on_a_smooth_trajectory() {

@@ -1,29 +1,20 @@
 //! `delta-gcode pose`: the model at one nozzle state, or the direct kinematics of three
 //! carriage heights.
 
-use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::Context;
 use serde_json::json;
 
-use crate::delta::TOWER_NAMES;
-use crate::machine::Machine;
-use crate::path::Vec3;
-
-/// Output format of the model commands.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Format {
-    Text,
-    Json,
-}
+use super::common::{Format, MachineArg, text_or_json};
+use delta_gcode::delta::TOWER_NAMES;
+use delta_gcode::path::Vec3;
 
 #[derive(clap::Args, Debug)]
 #[command(allow_negative_numbers = true)]
 pub struct Args {
-    /// Machine profile (YAML).
-    #[arg(long, value_name = "M.yaml")]
-    pub machine: PathBuf,
+    #[command(flatten)]
+    pub machine: MachineArg,
     /// Nozzle position X Y Z, mm (bed frame).
     #[arg(
         num_args = 3,
@@ -47,7 +38,8 @@ pub struct Args {
         conflicts_with_all = ["velocity", "accel"]
     )]
     pub carriages: Option<[f64; 3]>,
-    #[arg(long, value_enum, default_value_t = Format::Text)]
+    /// Output format
+    #[arg(long, default_value = "text", value_parser = text_or_json())]
     pub format: Format,
 }
 
@@ -67,7 +59,7 @@ fn parse_triple(s: &str) -> Result<[f64; 3], String> {
 }
 
 pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
-    let machine = Machine::load(&args.machine)?;
+    let machine = args.machine.load()?;
     let model = machine.model();
     if let Some(q) = args.carriages {
         let p = model
@@ -75,7 +67,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
             .context("the carriage heights have no nozzle position")?;
         match args.format {
             Format::Json => println!("{}", json!({"q_mm": q, "position_mm": [p.x, p.y, p.z]})),
-            Format::Text => {
+            Format::Text | Format::Github => {
                 println!("machine: {}", machine.name);
                 println!("carriages (mm): {:.4} {:.4} {:.4}", q[0], q[1], q[2]);
                 println!("position_mm: x {:.4}  y {:.4}  z {:.4}", p.x, p.y, p.z);
@@ -97,7 +89,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         .with_context(|| format!("nozzle position ({x}, {y}, {z}) mm is unreachable"))?;
     match args.format {
         Format::Json => println!("{}", serde_json::to_string(&s)?),
-        Format::Text => {
+        Format::Text | Format::Github => {
             println!("machine: {}", machine.name);
             println!(
                 "nozzle mm: {x:.4} {y:.4} {z:.4}   mm/s: {:.3} {:.3} {:.3}   mm/s²: {:.1} {:.1} {:.1}",

@@ -9,7 +9,7 @@ use anyhow::Context;
 
 use super::common::MachineArg;
 use super::replace::replace_file;
-use crate::analysis::{RunOptions, TRACE_HEADER, run as run_pipeline};
+use delta_gcode::analysis::{RunOptions, TRACE_HEADER, run as run_pipeline};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {

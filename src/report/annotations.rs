@@ -7,13 +7,10 @@ use crate::delta::TOWER_NAMES;
 
 /// Where and when a violation happened: `(tower A, decel, t=812.304 s)`.
 pub(super) fn context(v: &Violation) -> String {
-    let phase = serde_json::to_value(v.phase)
-        .ok()
-        .and_then(|p| p.as_str().map(str::to_string))
-        .unwrap_or_default();
     format!(
-        "(tower {}, {phase}, t={:.3} s)",
+        "(tower {}, {}, t={:.3} s)",
         TOWER_NAMES[v.tower - 1],
+        v.phase,
         v.t_s
     )
 }

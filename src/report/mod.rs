@@ -52,11 +52,48 @@ pub struct Summary {
     pub errors: u64,
 }
 
+/// What a flagged move did wrong; the JSON report's `kind`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ViolationKind {
+    /// More force than the motor can give.
+    Force,
+    Unreachable,
+    AboveHome,
+    BelowBed,
+    OutsideRadius,
+    NotSampled,
+}
+
+impl ViolationKind {
+    /// The name in reports (as in the JSON).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            ViolationKind::Force => "force",
+            ViolationKind::Unreachable => "unreachable",
+            ViolationKind::AboveHome => "above_home",
+            ViolationKind::BelowBed => "below_bed",
+            ViolationKind::OutsideRadius => "outside_radius",
+            ViolationKind::NotSampled => "not_sampled",
+        }
+    }
+}
+
+impl std::fmt::Display for ViolationKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl Serialize for ViolationKind {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.as_str())
+    }
+}
+
 #[derive(Clone, Debug, Serialize)]
 pub struct Violation {
     pub line: u64,
-    /// `force`, `unreachable`, `above_home` or `outside_radius`.
-    pub kind: &'static str,
+    pub kind: ViolationKind,
     pub peak_force_n: [f64; 3],
     /// 1-based tower (1 = A) of the worst force, or of the problem.
     pub tower: usize,
@@ -128,7 +165,7 @@ impl Report {
         }
         if let Some(v) = self.violation_of(m) {
             self.summary.violations += 1;
-            if v.kind == "unreachable" {
+            if v.kind == ViolationKind::Unreachable {
                 self.summary.unreachable += 1;
             }
             if self.violations.len() < MAX_LISTED {
@@ -197,7 +234,7 @@ impl Report {
                 ),
             ),
             None if m.peak_n() > self.limit_force_n => (
-                "force",
+                ViolationKind::Force,
                 worst,
                 m.peak_t_s[worst],
                 format!(
@@ -262,7 +299,7 @@ impl Report {
     pub fn worst_first(&self) -> Vec<&Violation> {
         let mut v: Vec<&Violation> = self.violations.iter().collect();
         let key = |v: &Violation| {
-            if v.kind == "force" {
+            if v.kind == ViolationKind::Force {
                 v.peak_force_n.iter().fold(0.0_f64, |a, b| a.max(*b))
             } else {
                 f64::INFINITY
@@ -326,13 +363,13 @@ pub(crate) mod tests {
         assert_eq!(r.summary.unreachable, 1);
         assert_eq!(r.summary.peak_force_n, [31.25, 12.0, 12.0]);
         assert_eq!(r.summary.peak_line, [20, 20, 10]);
-        assert_eq!(r.violations[0].kind, "force");
+        assert_eq!(r.violations[0].kind, ViolationKind::Force);
         assert_eq!(r.violations[0].tower, 1);
         assert_eq!(
             r.violations[0].message,
             "OVER force 31.2/12.0/9.8 N > 30.0 N"
         );
-        assert_eq!(r.violations[1].kind, "unreachable");
+        assert_eq!(r.violations[1].kind, ViolationKind::Unreachable);
         assert_eq!(r.violations[1].tower, 2);
         assert!(r.failed());
         let worst: Vec<u64> = r.worst_first().iter().map(|v| v.line).collect();

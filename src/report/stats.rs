@@ -3,6 +3,7 @@
 
 use serde::Serialize;
 
+use super::ViolationKind;
 use crate::resample::Phase;
 
 /// Why a move cannot be run as planned (besides asking too much force).
@@ -33,14 +34,14 @@ pub enum Problem {
 }
 
 impl Problem {
-    /// The `kind` of the JSON report's violation.
-    pub fn kind(&self) -> &'static str {
+    /// The kind of violation this problem makes.
+    pub fn kind(&self) -> ViolationKind {
         match self {
-            Problem::Unreachable { .. } => "unreachable",
-            Problem::AboveHome { .. } => "above_home",
-            Problem::BelowBed { .. } => "below_bed",
-            Problem::OutsideRadius { .. } => "outside_radius",
-            Problem::NotSampled { .. } => "not_sampled",
+            Problem::Unreachable { .. } => ViolationKind::Unreachable,
+            Problem::AboveHome { .. } => ViolationKind::AboveHome,
+            Problem::BelowBed { .. } => ViolationKind::BelowBed,
+            Problem::OutsideRadius { .. } => ViolationKind::OutsideRadius,
+            Problem::NotSampled { .. } => ViolationKind::NotSampled,
         }
     }
 

@@ -2,7 +2,7 @@
 
 use std::io::{self, Write};
 
-use super::{Report, format_forces};
+use super::{Report, ViolationKind, format_forces};
 use crate::delta::TOWER_NAMES;
 
 /// How many of the worst moves the text report lists.
@@ -46,11 +46,7 @@ pub fn write_text(out: &mut (impl Write + ?Sized), report: &Report) -> io::Resul
             "line", "force A/B/C (N)", "margin", "phase", "t (s)"
         )?;
         for v in worst.iter().take(WORST_SHOWN) {
-            let phase = serde_json::to_value(v.phase)
-                .ok()
-                .and_then(|p| p.as_str().map(str::to_string))
-                .unwrap_or_default();
-            let (margin, what) = if v.kind == "force" {
+            let (margin, what) = if v.kind == ViolationKind::Force {
                 let peak = v.peak_force_n[v.tower - 1];
                 (
                     format!("{:+.1} N", limit - peak),
@@ -72,7 +68,7 @@ pub fn write_text(out: &mut (impl Write + ?Sized), report: &Report) -> io::Resul
                 v.line,
                 format_forces(&v.peak_force_n),
                 margin,
-                phase,
+                v.phase.as_str(),
                 v.t_s,
                 what
             )?;

@@ -13,14 +13,37 @@ pub use curve::{Curve, Frame, Lissajous, TaylorStep, taylor_step, walk_constant_
 pub use sampler::sample_move;
 
 /// Where in its move a sample lies.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
-#[serde(rename_all = "lowercase")]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Phase {
     Accel,
     Cruise,
     Decel,
     /// Within half a period of a junction, where the velocity impulse is spread.
     Corner,
+}
+
+impl Phase {
+    /// The name in reports (as in the JSON).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Phase::Accel => "accel",
+            Phase::Cruise => "cruise",
+            Phase::Decel => "decel",
+            Phase::Corner => "corner",
+        }
+    }
+}
+
+impl std::fmt::Display for Phase {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl serde::Serialize for Phase {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.as_str())
+    }
 }
 
 /// Where the resampler's samples go, in time order. A closure taking a [`Sample`] is one;

@@ -5,10 +5,10 @@ use std::process::ExitCode;
 
 use serde_json::json;
 
-use super::pose::Format;
-use crate::delta::TOWER_NAMES;
-use crate::machine::Machine;
-use crate::path::Vec3;
+use super::common::{Format, text_or_json};
+use delta_gcode::delta::TOWER_NAMES;
+use delta_gcode::machine::Machine;
+use delta_gcode::path::Vec3;
 
 #[derive(clap::Args, Debug)]
 #[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
@@ -18,7 +18,8 @@ pub struct Args {
     /// Machine profile (YAML).
     #[arg(value_name = "M.yaml", required = true)]
     pub profile: Option<PathBuf>,
-    #[arg(long, value_enum, default_value_t = Format::Text)]
+    /// Output format
+    #[arg(long, default_value = "text", value_parser = text_or_json())]
     pub format: Format,
 }
 
@@ -75,7 +76,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
             });
             println!("{v}");
         }
-        Format::Text => {
+        Format::Text | Format::Github => {
             let l = &machine.limits;
             let e = &machine.extruder;
             println!("{}: profile OK ({})", machine.name, profile.display());
