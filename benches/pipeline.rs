@@ -6,7 +6,7 @@ use std::hint::black_box;
 use std::path::Path;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use delta_gcode::analysis::{MoveChecker, RunOptions, Scratch};
+use delta_gcode::analysis::{MoveChecker, Scratch};
 use delta_gcode::delta::{BLOCK, ForceBlock, StateBlock};
 use delta_gcode::gcode::{Event, interpret};
 use delta_gcode::machine::Machine;
@@ -94,7 +94,7 @@ fn bench(c: &mut Criterion) {
             &mut |_| samples += 1,
         );
     }
-    let checker = MoveChecker::new(&machine, RunOptions::default());
+    let checker = MoveChecker::new(&machine, ());
     let mut scratch = Box::<Scratch>::default();
     let mut g = c.benchmark_group("resample_and_model");
     g.throughput(Throughput::Elements(samples));

@@ -11,7 +11,7 @@
 
 use std::collections::BTreeMap;
 
-use delta_gcode::analysis::{self, MoveResult};
+use delta_gcode::analysis::{self, MoveResult, TraceRows, Window};
 use delta_gcode::emit::{emit, strip};
 use delta_gcode::gcode::{Event, LimitChange, Move, interpret};
 use delta_gcode::machine::Machine;
@@ -202,18 +202,24 @@ fn check_pipeline(data: &[u8], machine: &Machine, trace: bool) {
     );
     let mut diags = Vec::new();
     let mut moves = 0;
+    // The verdict alone, or with the trace rows and a plot window as well.
+    let observer = trace.then_some((
+        TraceRows,
+        Window {
+            from_s: 0.0,
+            to_s: 1.0,
+        },
+    ));
     let totals = analysis::run(
         data,
         machine,
-        analysis::RunOptions {
-            trace,
-            window_s: Some((0.0, 1.0)),
-        },
-        |r: MoveResult| {
+        observer,
+        |r: MoveResult<Option<(Vec<u8>, _)>>| {
             moves += 1;
             check_stats(&r.stats);
             report.add_move(&r.stats);
-            for row in r.trace.lines() {
+            let rows = r.observed.map(|(rows, _)| rows).unwrap_or_default();
+            for row in String::from_utf8_lossy(&rows).lines() {
                 let fields: Vec<&str> = row.split(',').collect();
                 assert_eq!(fields.len(), 25, "{row}");
                 for f in fields {

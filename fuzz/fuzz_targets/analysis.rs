@@ -20,7 +20,7 @@ fuzz_target!(|data: &[u8]| {
     let totals = analysis::run(
         data,
         machine(),
-        analysis::RunOptions::default(),
+        (),
         |r| {
             let s = &r.stats;
             assert!(s.peak_force_n.iter().all(|f| f.is_finite()), "{s:?}");

@@ -18,8 +18,12 @@ use crate::planner::{PlannedMove, Planner};
 use crate::report::{MAX_LISTED, MoveStats, Report};
 
 mod move_check;
+mod observe;
+mod trace;
 
 pub use move_check::{MoveChecker, Scratch};
+pub use observe::{Evaluated, Observer, Verdict, Window};
+pub use trace::{TraceRow, TraceRows, trace_header};
 
 /// The progress bar's move count is updated this often.
 const PROGRESS_EVERY_MOVES: u64 = 4096;
@@ -30,24 +34,13 @@ const BATCH: usize = 4096;
 /// Consecutive moves checked by one rayon task (their samples share the model's blocks).
 const CHUNK: usize = 64;
 
-/// What the model found for one planned move.
-pub struct MoveResult {
+/// What the model found for one planned move: the verdict's statistics and what the
+/// run's observer kept of it.
+pub struct MoveResult<P> {
     pub stats: MoveStats,
-    /// The move's rows of the trace CSV, when a trace was asked for.
-    pub trace: String,
-    /// (t, forces) of the move's samples inside [`RunOptions::window_s`].
-    pub window: Vec<(f64, [f64; 3])>,
+    pub observed: P,
     /// Where the move ends on the bed, mm.
     pub end_xy_mm: [f64; 2],
-}
-
-/// What a run collects besides the per-move statistics.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct RunOptions {
-    /// Write the trace CSV rows of every sample.
-    pub trace: bool,
-    /// Keep the forces of the samples in this time span (s), for a plot.
-    pub window_s: Option<(f64, f64)>,
 }
 
 /// Totals of one run, besides the per-move results.
@@ -56,29 +49,27 @@ pub struct RunTotals {
     pub print_time_s: f64,
 }
 
-/// The columns of the trace CSV (DESIGN.md).
-pub const TRACE_HEADER: &str = "t_s,line,x_mm,y_mm,z_mm,vx_mm_s,vy_mm_s,vz_mm_s,ax_mm_s2,ay_mm_s2,az_mm_s2,q1_mm,q2_mm,q3_mm,dq1_mm_s,dq2_mm_s,dq3_mm_s,ddq1_mm_s2,ddq2_mm_s2,ddq3_mm_s2,f1_n,f2_n,f3_n,power_w,energy_rate_w";
-
 /// Batches in flight between the planner and the model stage: bounds the memory.
 const BATCHES_IN_FLIGHT: usize = 2;
 
-/// Runs the pipeline over `input`. `on_move` gets every planned move's result in file order,
-/// `on_diag` every diagnostic of the reader.
+/// Runs the pipeline over `input`. `on_move` gets every planned move's result in file order
+/// (the verdict's statistics and what `observer` kept), `on_diag` every diagnostic of the
+/// reader.
 ///
 /// The reader, interpreter and planner run on this thread; the model stage runs on another,
 /// fed batches of planned moves through a bounded channel, and spreads each batch over the
 /// rayon pool. So the sequential stages overlap the parallel one, and memory stays bounded.
-pub fn run<R: Read>(
+pub fn run<R: Read, O: Observer>(
     input: R,
     machine: &Machine,
-    options: RunOptions,
-    mut on_move: impl FnMut(MoveResult) + Send,
+    observer: O,
+    mut on_move: impl FnMut(MoveResult<O::PerMove>) + Send,
     on_diag: impl FnMut(Diagnostic),
 ) -> io::Result<RunTotals> {
     let (to_model, batches) = mpsc::sync_channel::<Vec<PlannedMove>>(BATCHES_IN_FLIGHT);
     std::thread::scope(|scope| {
         let model = scope.spawn(move || {
-            let mut stage = ModelStage::new(machine, options);
+            let mut stage = ModelStage::new(machine, observer);
             for batch in batches {
                 stage.pending.extend(batch);
                 stage.process(false, &mut on_move);
@@ -116,17 +107,17 @@ pub fn run<R: Read>(
 }
 
 /// The parallel stage: planned moves waiting for their model run.
-struct ModelStage<'m> {
-    checker: MoveChecker<'m>,
+struct ModelStage<'m, O> {
+    checker: MoveChecker<'m, O>,
     pending: Vec<PlannedMove>,
     /// The last move processed: the previous move of the next batch's first.
     prev: Option<PlannedMove>,
 }
 
-impl<'m> ModelStage<'m> {
-    fn new(machine: &'m Machine, options: RunOptions) -> Self {
+impl<'m, O: Observer> ModelStage<'m, O> {
+    fn new(machine: &'m Machine, observer: O) -> Self {
         ModelStage {
-            checker: MoveChecker::new(machine, options),
+            checker: MoveChecker::new(machine, observer),
             pending: Vec::new(),
             prev: None,
         }
@@ -134,7 +125,7 @@ impl<'m> ModelStage<'m> {
 
     /// Runs the model over the pending moves. All but the last are run unless `last`: the
     /// last one's junction with the move after it is not known yet.
-    fn process(&mut self, last: bool, on_move: &mut impl FnMut(MoveResult)) {
+    fn process(&mut self, last: bool, on_move: &mut impl FnMut(MoveResult<O::PerMove>)) {
         let n = if last {
             self.pending.len()
         } else {
@@ -145,7 +136,7 @@ impl<'m> ModelStage<'m> {
         }
         let pending = &self.pending;
         let prev = self.prev;
-        let results: Vec<Vec<MoveResult>> = (0..n.div_ceil(CHUNK))
+        let results: Vec<Vec<MoveResult<O::PerMove>>> = (0..n.div_ceil(CHUNK))
             .into_par_iter()
             .map_init(Box::<Scratch>::default, |scratch, c| {
                 let run = c * CHUNK..n.min((c + 1) * CHUNK);
@@ -188,7 +179,7 @@ pub fn check_file(
     let totals = run(
         BufReader::with_capacity(1 << 16, input),
         machine,
-        RunOptions::default(),
+        (),
         |r| {
             report.add_move(&r.stats);
             if let Some(bar) = progress

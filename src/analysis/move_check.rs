@@ -1,16 +1,14 @@
 //! One planned move through the model: resampled, a block of samples at a time through the
-//! vectorised forces, into the move's statistics.
+//! vectorised forces, and each block's runs handed to the observers.
 
-use std::fmt::Write as _;
-
-use crate::delta::{BLOCK, DeltaModel, ForceBlock, StateBlock, Unreachable};
+use crate::delta::{BLOCK, DeltaModel, ForceBlock, StateBlock};
 use crate::machine::Machine;
-use crate::path::Vec3;
 use crate::planner::PlannedMove;
 use crate::report::{MoveStats, NEAR_SINGULAR_RATIO, Problem};
 use crate::resample::{Phase, Sample, SampleSink, sample_move};
 
-use super::{MoveResult, RunOptions};
+use super::MoveResult;
+use super::observe::{Evaluated, Observer, Verdict, unreachable};
 
 /// Tolerance on the print radius and the bed, mm: rounding in slicer output.
 const GEOMETRY_TOLERANCE_MM: f64 = 1e-3;
@@ -20,40 +18,36 @@ const GEOMETRY_TOLERANCE_MM: f64 = 1e-3;
 /// coordinate does, and would otherwise keep the check busy for hours.
 const MAX_SAMPLES_PER_MOVE: f64 = 1e7;
 
-/// Checks planned moves against one machine. Shared between threads; each thread brings
-/// its own [`Scratch`].
-pub struct MoveChecker<'m> {
+/// Checks planned moves against one machine, for the verdict and for `observer`. Shared
+/// between threads; each thread brings its own [`Scratch`].
+pub struct MoveChecker<'m, O> {
     machine: &'m Machine,
     model: DeltaModel,
-    options: RunOptions,
+    observer: O,
 }
 
-impl<'m> MoveChecker<'m> {
-    pub fn new(machine: &'m Machine, options: RunOptions) -> Self {
+impl<'m, O: Observer> MoveChecker<'m, O> {
+    pub fn new(machine: &'m Machine, observer: O) -> Self {
         MoveChecker {
             machine,
             model: machine.model(),
-            options,
+            observer,
         }
     }
 
     /// Checks consecutive planned moves, appending one result per move to `out`: each move
     /// resampled, its samples gathered into blocks (which span moves, so that the vectorised
-    /// forces run on full blocks) and the forces reduced into the move's statistics; with a
-    /// trace, every sample's row too. `prev` and `next` are the moves around the run (None at
-    /// the start or end of the file).
+    /// forces run on full blocks) and each block's runs handed to the verdict and the
+    /// observer. `prev` and `next` are the moves around the run (None at the start or end of
+    /// the file).
     pub fn check_run(
         &self,
         scratch: &mut Scratch,
         prev: Option<&PlannedMove>,
         moves: &[PlannedMove],
         next: Option<&PlannedMove>,
-        out: &mut Vec<MoveResult>,
+        out: &mut Vec<MoveResult<O::PerMove>>,
     ) {
-        let window_s = self
-            .options
-            .window_s
-            .unwrap_or((f64::INFINITY, f64::NEG_INFINITY));
         let period_s = self.machine.sampling.period_s;
         scratch.len = 0;
         for (i, mv) in moves.iter().enumerate() {
@@ -66,9 +60,8 @@ impl<'m> MoveChecker<'m> {
             let end = mv.path.end();
             let slot = out.len();
             out.push(MoveResult {
-                stats: MoveStats::new(mv.line),
-                trace: String::new(),
-                window: Vec::new(),
+                stats: Verdict.start(mv.line),
+                observed: self.observer.start(mv.line),
                 end_xy_mm: [end.x, end.y],
             });
             let stats = &mut out[slot].stats;
@@ -82,11 +75,10 @@ impl<'m> MoveChecker<'m> {
                 scratch: &mut *scratch,
                 out: &mut *out,
                 slot,
-                window_s,
             };
             sample_move(before, mv, after, period_s, &mut sink);
         }
-        scratch.flush(&self.model, window_s, out);
+        self.flush(scratch, out);
     }
 
     /// A move too long to sample: flagged, and its ends checked.
@@ -100,49 +92,6 @@ impl<'m> MoveChecker<'m> {
                 stats.flag(unreachable(e, t_s, pos));
             }
         }
-    }
-
-    /// Appends a sample's row of the trace CSV (nothing for a pose the model cannot take:
-    /// the statistics flag it).
-    #[inline(never)] // as `Scratch::flush`
-    fn trace_row(&self, s: &Sample, trace: &mut String) {
-        let Ok(st) = self.model.evaluate(s.pos_mm, s.vel_mm_s, s.acc_mm_s2) else {
-            return;
-        };
-        let p = &s.pos_mm;
-        let v = &s.vel_mm_s;
-        let a = &s.acc_mm_s2;
-        let (q, dq, ddq, f) = (st.q_mm, st.dq_mm_s, st.ddq_mm_s2, st.force_n);
-        // Display of f64 is the shortest text that reads back to the same value.
-        let _ = writeln!(
-            trace,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-            s.t_s,
-            s.line,
-            p.x,
-            p.y,
-            p.z,
-            v.x,
-            v.y,
-            v.z,
-            a.x,
-            a.y,
-            a.z,
-            q[0],
-            q[1],
-            q[2],
-            dq[0],
-            dq[1],
-            dq[2],
-            ddq[0],
-            ddq[1],
-            ddq[2],
-            f[0],
-            f[1],
-            f[2],
-            st.power_w,
-            st.energy_rate_w
-        );
     }
 
     /// The checks on the move's path as a whole: the print disc, the bed, and how close
@@ -170,29 +119,57 @@ impl<'m> MoveChecker<'m> {
             }
         }
     }
+
+    /// Runs the model over the scratch block and hands it, a move's run of samples at a
+    /// time, to the verdict and the observer.
+    #[inline(never)] // keeps the sink's per-sample method small in the sampling loop
+    fn flush(&self, scratch: &mut Scratch, out: &mut [MoveResult<O::PerMove>]) {
+        let n = scratch.len;
+        scratch.len = 0;
+        if n == 0 {
+            return;
+        }
+        self.model
+            .forces_block(&scratch.states, n, &mut scratch.forces);
+        let mut j0 = 0;
+        while j0 < n {
+            let slot = scratch.slot[j0];
+            let j1 = scratch.slot[j0..n]
+                .iter()
+                .position(|&s| s != slot)
+                .map_or(n, |k| j0 + k);
+            let Some(r) = out.get_mut(slot) else {
+                break;
+            };
+            let run = Evaluated {
+                line: r.stats.line,
+                t_s: &scratch.t_s,
+                phase: &scratch.phase,
+                states: &scratch.states,
+                forces: &scratch.forces,
+                lanes: j0..j1,
+            };
+            Verdict.observe(&self.model, &mut r.stats, &run);
+            self.observer.observe(&self.model, &mut r.observed, &run);
+            j0 = j1;
+        }
+    }
 }
 
 /// The samples of the move whose result is `out[slot]`, on their way into the blocks.
-struct MoveSink<'a, 'm> {
-    checker: &'a MoveChecker<'m>,
+struct MoveSink<'a, 'm, O: Observer> {
+    checker: &'a MoveChecker<'m, O>,
     scratch: &'a mut Scratch,
-    out: &'a mut Vec<MoveResult>,
+    out: &'a mut Vec<MoveResult<O::PerMove>>,
     slot: usize,
-    window_s: (f64, f64),
 }
 
-impl SampleSink for MoveSink<'_, '_> {
+impl<O: Observer> SampleSink for MoveSink<'_, '_, O> {
     #[inline(always)]
     fn sample(&mut self, s: Sample) {
-        if self.checker.options.trace
-            && let Some(r) = self.out.get_mut(self.slot)
-        {
-            self.checker.trace_row(&s, &mut r.trace);
-        }
         self.scratch.push(&s, self.slot);
         if self.scratch.len == BLOCK {
-            let model = &self.checker.model;
-            self.scratch.flush(model, self.window_s, self.out);
+            self.checker.flush(self.scratch, self.out);
         }
     }
 }
@@ -241,87 +218,15 @@ impl Scratch {
         }
         self.len = j + 1;
     }
-
-    /// Runs the model over the block and empties it into the results, a move's run of
-    /// samples at a time. `window_s`: keep the forces of the samples in this span (s).
-    #[inline(never)] // keeps the sink's per-sample method small in the sampling loop
-    fn flush(&mut self, model: &DeltaModel, window_s: (f64, f64), out: &mut [MoveResult]) {
-        let n = self.len;
-        self.len = 0;
-        if n == 0 {
-            return;
-        }
-        model.forces_block(&self.states, n, &mut self.forces);
-        let (st, fo) = (&self.states, &self.forces);
-        let mut j0 = 0;
-        while j0 < n {
-            let slot = self.slot[j0];
-            let j1 = self.slot[j0..n]
-                .iter()
-                .position(|&s| s != slot)
-                .map_or(n, |k| j0 + k);
-            let Some(r) = out.get_mut(slot) else {
-                break;
-            };
-            let run = j0..j1;
-            if fo.ok[run.clone()].iter().all(|&ok| ok) {
-                let f = &fo.force_n;
-                r.stats.add_run(
-                    &self.t_s[run.clone()],
-                    &self.phase[run.clone()],
-                    [&f[0][run.clone()], &f[1][run.clone()], &f[2][run.clone()]],
-                    &fo.energy_residual_w[run.clone()],
-                );
-            } else {
-                for j in run.clone() {
-                    let v3 = |c: &[[f64; BLOCK]; 3]| Vec3::new(c[0][j], c[1][j], c[2][j]);
-                    let pos = v3(&st.pos_mm);
-                    let f = [fo.force_n[0][j], fo.force_n[1][j], fo.force_n[2][j]];
-                    if fo.ok[j] {
-                        r.stats
-                            .add(self.t_s[j], self.phase[j], f, fo.energy_residual_w[j]);
-                    } else if let Err(e) = model.evaluate(pos, v3(&st.vel_mm_s), v3(&st.acc_mm_s2))
-                    {
-                        r.stats.flag(unreachable(e, self.t_s[j], pos));
-                    }
-                }
-            }
-            if self.t_s[j0] <= window_s.1 && self.t_s[j1 - 1] >= window_s.0 {
-                for j in run {
-                    let t = self.t_s[j];
-                    if fo.ok[j] && t >= window_s.0 && t <= window_s.1 {
-                        r.window
-                            .push((t, [fo.force_n[0][j], fo.force_n[1][j], fo.force_n[2][j]]));
-                    }
-                }
-            }
-            j0 = j1;
-        }
-    }
-}
-
-/// The problem of a pose the model cannot take.
-fn unreachable(e: Unreachable, t_s: f64, pos: Vec3) -> Problem {
-    match e {
-        Unreachable::AboveTop { tower, over_mm } => Problem::AboveHome {
-            t_s,
-            tower,
-            over_mm,
-        },
-        e => Problem::Unreachable {
-            t_s,
-            tower: e.tower(),
-            pos_mm: [pos.x, pos.y, pos.z],
-            reason: e.to_string(),
-        },
-    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::analysis::{TraceRows, Window};
     use crate::gcode::interpret;
     use crate::machine::test_support::kossel_machine;
+    use crate::path::Vec3;
     use crate::planner::Planner;
 
     fn plan(machine: &Machine, gcode: &str) -> Vec<PlannedMove> {
@@ -350,11 +255,14 @@ mod tests {
         gcode += "G1 X60 Y0 F3000\nG1 X0 Y-150\nG1 X0 Y0\nG1 X1 Y1\n";
         let machine = kossel_machine();
         let moves = plan(&machine, &gcode);
-        let options = RunOptions {
-            trace: true,
-            window_s: Some((0.05, 1.5)),
-        };
-        let checker = MoveChecker::new(&machine, options);
+        let observer = (
+            TraceRows,
+            Window {
+                from_s: 0.05,
+                to_s: 1.5,
+            },
+        );
+        let checker = MoveChecker::new(&machine, observer);
         let mut scratch = Box::<Scratch>::default();
         let mut together = Vec::new();
         checker.check_run(&mut scratch, None, &moves, None, &mut together);
@@ -366,7 +274,7 @@ mod tests {
                 .iter()
                 .any(|r| matches!(r.stats.problem, Some(Problem::Unreachable { .. })))
         );
-        assert!(together.iter().any(|r| !r.window.is_empty()));
+        assert!(together.iter().any(|r| !r.observed.1.is_empty()));
         for (i, r) in together.iter().enumerate() {
             let mut alone = Vec::new();
             let prev = i.checked_sub(1).map(|j| &moves[j]);
@@ -374,11 +282,11 @@ mod tests {
             checker.check_run(&mut scratch, prev, &moves[i..=i], next, &mut alone);
             let a = &alone[0];
             assert_eq!(r.stats, a.stats, "move {i}");
-            assert_eq!(r.trace, a.trace, "move {i}");
-            assert_eq!(r.window, a.window, "move {i}");
+            assert_eq!(r.observed, a.observed, "move {i}");
             assert_eq!(r.end_xy_mm, a.end_xy_mm);
             // The trace has one row per sample the model could take.
-            assert_eq!(r.trace.lines().count() as u64, r.stats.samples, "move {i}");
+            let rows = r.observed.0.iter().filter(|&&b| b == b'\n').count();
+            assert_eq!(rows as u64, r.stats.samples, "move {i}");
         }
     }
 }

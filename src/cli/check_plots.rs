@@ -7,7 +7,7 @@ use std::path::Path;
 
 use anyhow::Context;
 
-use delta_gcode::analysis::{RunOptions, run};
+use delta_gcode::analysis::{Window, run};
 use delta_gcode::machine::Machine;
 use delta_gcode::plot::{bed_map_svg, force_time_svg};
 use delta_gcode::report::Report;
@@ -46,16 +46,16 @@ pub fn write_plots(
     let mut grid = vec![None::<(f64, f64, f64)>; GRID * GRID];
     let mut window = Vec::new();
     let input = BufReader::with_capacity(1 << 16, File::open(file)?);
-    let options = RunOptions {
-        trace: false,
-        window_s: Some((worst_t - HALF_WINDOW_S, worst_t + HALF_WINDOW_S)),
+    let observer = Window {
+        from_s: worst_t - HALF_WINDOW_S,
+        to_s: worst_t + HALF_WINDOW_S,
     };
     run(
         input,
         machine,
-        options,
+        observer,
         |r| {
-            window.extend(r.window);
+            window.extend(r.observed);
             let [x, y] = r.end_xy_mm;
             let use_ = r.stats.peak_n() / limit;
             let (i, j) = (((x + radius) / cell).floor(), ((y + radius) / cell).floor());

@@ -6,7 +6,7 @@ use std::process::ExitCode;
 
 use anyhow::{Context, bail};
 
-use delta_gcode::delta::DeltaModel;
+use delta_gcode::delta::{self, DeltaModel};
 use delta_gcode::machine::Machine;
 use delta_gcode::path::Vec3;
 use delta_gcode::plot::{HLine, LineChart, Series, line_chart_svg, read_trace_columns};
@@ -229,7 +229,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         }
         if let Some((model, period_s)) = &model {
             let state: Vec<&Vec<f64>> = STATE_COLUMNS.iter().map(|c| &columns[col(c)]).collect();
-            let slope = energy_slope(model, &state, &kept, 0.5 * period_s)
+            let slope = energy_slope_of_rows(model, &state, &kept, 0.5 * period_s)
                 .with_context(|| format!("energy of {}", path.display()))?;
             let points = slope.into_iter().map(|(i, y)| (scale_x(x[i]), y)).collect();
             series.push(Series {
@@ -265,12 +265,10 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// d(K+U)/dt by central differences over the rows `kept` (row index, W). K + U of a row comes
-/// from the model at its nozzle position and velocity (`state`: the [`STATE_COLUMNS`]). The
-/// neighbours differenced are the nearest rows at least `min_gap_s` before and after, so the
-/// extra samples at junctions and phase boundaries (a fraction of Ts apart, or at the same
-/// time) do not divide a velocity jump by a tiny interval.
-fn energy_slope(
+/// d(K+U)/dt of the rows `kept` (row index, W): K + U of each row from the model at its
+/// nozzle state (`state`: the [`STATE_COLUMNS`]), differenced in time by
+/// [`delta::energy_slope`].
+fn energy_slope_of_rows(
     model: &DeltaModel,
     state: &[&Vec<f64>],
     kept: &[usize],
@@ -280,90 +278,21 @@ fn energy_slope(
     let energy: Vec<f64> = kept
         .iter()
         .map(|&i| {
-            let s = model
-                .evaluate(v3(i, 1), v3(i, 4), v3(i, 7))
-                .with_context(|| format!("at t = {} s", state[0][i]))?;
-            Ok(s.kinetic_j + s.potential_j)
+            model
+                .energy_j(v3(i, 1), v3(i, 4))
+                .with_context(|| format!("at t = {} s", state[0][i]))
         })
         .collect::<anyhow::Result<_>>()?;
-    let t = |k: usize| state[0][kept[k]];
-    let (mut before, mut after) = (0, 0);
-    let mut out = Vec::with_capacity(kept.len());
-    for k in 0..kept.len() {
-        while before + 1 < k && t(k) - t(before + 1) >= min_gap_s {
-            before += 1;
-        }
-        after = after.max(k);
-        while after < kept.len() && t(after) - t(k) < min_gap_s {
-            after += 1;
-        }
-        if after == kept.len() {
-            break;
-        }
-        if t(k) - t(before) >= min_gap_s {
-            let slope = (energy[after] - energy[before]) / (t(after) - t(before));
-            out.push((kept[k], slope));
-        }
-    }
-    Ok(out)
+    let t: Vec<f64> = kept.iter().map(|&i| state[0][i]).collect();
+    Ok(delta::energy_slope(&t, &energy, min_gap_s)
+        .into_iter()
+        .map(|(k, slope)| (kept[k], slope))
+        .collect())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    use delta_gcode::machine::Machine;
-
-    #[test]
-    fn energy_slope_matches_the_power_on_a_smooth_trajectory() {
-        // Samples every 1 ms plus an extra one 10 µs after each (as at a junction), on
-        // x = 40 sin 9t, y = 30 cos 7t, z = 20 + 10 t: the differenced energy must be the
-        // model's power to the truncation of a 2 ms central difference.
-        let text = include_str!("../../machines/paper.yaml");
-        let machine = Machine::from_yaml_str(text, "paper").unwrap();
-        let model = machine.model();
-        let mut cols: Vec<Vec<f64>> = vec![Vec::new(); STATE_COLUMNS.len()];
-        let mut power = Vec::new();
-        for k in 0..400 {
-            for t in [k as f64 * 1e-3, k as f64 * 1e-3 + 1e-5] {
-                let (s9, c9, s7, c7) = (
-                    (9.0 * t).sin(),
-                    (9.0 * t).cos(),
-                    (7.0 * t).sin(),
-                    (7.0 * t).cos(),
-                );
-                let row = [
-                    t,
-                    40.0 * s9,
-                    30.0 * c7,
-                    20.0 + 10.0 * t,
-                    360.0 * c9,
-                    -210.0 * s7,
-                    10.0,
-                    -3240.0 * s9,
-                    -1470.0 * c7,
-                    0.0,
-                ];
-                for (c, v) in cols.iter_mut().zip(row) {
-                    c.push(v);
-                }
-                let v3 = |i: usize| Vec3::new(row[i], row[i + 1], row[i + 2]);
-                power.push(model.evaluate(v3(1), v3(4), v3(7)).unwrap().power_w);
-            }
-        }
-        let state: Vec<&Vec<f64>> = cols.iter().collect();
-        let kept: Vec<usize> = (0..power.len()).collect();
-        let slope = energy_slope(&model, &state, &kept, 0.5e-3).unwrap();
-        assert!(slope.len() > 700, "{}", slope.len());
-        let scale = power.iter().fold(0.0_f64, |m, p| m.max(p.abs()));
-        for (i, s) in slope {
-            assert!(
-                (s - power[i]).abs() < 2e-3 * scale,
-                "row {i}: {s} vs {}",
-                power[i]
-            );
-        }
-    }
 
     #[test]
     fn line_ranges_parse_with_open_ends() {

@@ -9,7 +9,7 @@ use anyhow::Context;
 
 use super::common::MachineArg;
 use super::replace::replace_file;
-use delta_gcode::analysis::{RunOptions, TRACE_HEADER, run as run_pipeline};
+use delta_gcode::analysis::{TraceRows, run as run_pipeline, trace_header};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -27,18 +27,15 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let machine = args.machine.load()?;
     let write = |w: &mut (dyn Write + Send)| -> std::io::Result<()> {
         let input = BufReader::with_capacity(1 << 16, File::open(&args.file)?);
-        writeln!(w, "{TRACE_HEADER}")?;
+        w.write_all(trace_header().as_bytes())?;
         let mut failure = Ok(());
         run_pipeline(
             input,
             &machine,
-            RunOptions {
-                trace: true,
-                window_s: None,
-            },
+            TraceRows,
             |r| {
                 if failure.is_ok() {
-                    failure = w.write_all(r.trace.as_bytes());
+                    failure = w.write_all(&r.observed);
                 }
             },
             |d| {

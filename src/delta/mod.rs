@@ -7,10 +7,12 @@
 //! eq. 6). The platform centre P is the nozzle plus (0, 0, PQ).
 
 mod dynamics;
+mod energy;
 mod kinematics;
 mod statics;
 
 pub use dynamics::{BLOCK, DynState, ForceBlock, StateBlock};
+pub use energy::energy_slope;
 
 /// Tower names in order (towers 1, 2, 3 of the paper).
 pub const TOWER_NAMES: [char; 3] = ['A', 'B', 'C'];

@@ -1,0 +1,174 @@
+//! What the model computed, as the observers of one computation see it: the statistics
+//! (the verdict), the trace rows and the forces of a plot window each reduce the same runs
+//! of evaluated samples, a move's run at a time.
+
+use std::ops::Range;
+
+use crate::delta::{DeltaModel, ForceBlock, StateBlock, Unreachable};
+use crate::path::Vec3;
+use crate::report::{MoveStats, Problem};
+use crate::resample::Phase;
+
+/// A run of consecutive samples of one move, evaluated in one block.
+pub struct Evaluated<'a> {
+    /// Source line of the move.
+    pub line: u64,
+    pub t_s: &'a [f64],
+    pub phase: &'a [Phase],
+    pub states: &'a StateBlock,
+    pub forces: &'a ForceBlock,
+    /// The run's lanes in the block (and in `t_s`, `phase`).
+    pub lanes: Range<usize>,
+}
+
+impl Evaluated<'_> {
+    /// Position, velocity and acceleration of lane `j`, mm, mm/s, mm/s².
+    pub fn state(&self, j: usize) -> (Vec3, Vec3, Vec3) {
+        let v3 = |c: &[[f64; crate::delta::BLOCK]; 3]| Vec3::new(c[0][j], c[1][j], c[2][j]);
+        let s = self.states;
+        (v3(&s.pos_mm), v3(&s.vel_mm_s), v3(&s.acc_mm_s2))
+    }
+
+    /// The forces of lane `j`, N.
+    pub fn force_n(&self, j: usize) -> [f64; 3] {
+        let f = &self.forces.force_n;
+        [f[0][j], f[1][j], f[2][j]]
+    }
+}
+
+/// A reduction of the evaluated samples, one accumulator per move. Shared between threads.
+pub trait Observer: Send + Sync {
+    /// What the observer keeps of one move.
+    type PerMove: Send;
+
+    /// The accumulator of the move of source line `line`, before its first sample.
+    fn start(&self, line: u64) -> Self::PerMove;
+
+    /// Takes a run of the move's evaluated samples (in time order, runs in time order).
+    fn observe(&self, model: &DeltaModel, acc: &mut Self::PerMove, run: &Evaluated);
+}
+
+/// Observes nothing: a plain check.
+impl Observer for () {
+    type PerMove = ();
+
+    fn start(&self, _: u64) {}
+
+    #[inline(always)]
+    fn observe(&self, _: &DeltaModel, _: &mut (), _: &Evaluated) {}
+}
+
+/// Two observers of the same runs.
+impl<A: Observer, B: Observer> Observer for (A, B) {
+    type PerMove = (A::PerMove, B::PerMove);
+
+    fn start(&self, line: u64) -> Self::PerMove {
+        (self.0.start(line), self.1.start(line))
+    }
+
+    fn observe(&self, model: &DeltaModel, acc: &mut Self::PerMove, run: &Evaluated) {
+        self.0.observe(model, &mut acc.0, run);
+        self.1.observe(model, &mut acc.1, run);
+    }
+}
+
+/// An observer that may be absent.
+impl<A: Observer> Observer for Option<A> {
+    type PerMove = Option<A::PerMove>;
+
+    fn start(&self, line: u64) -> Self::PerMove {
+        self.as_ref().map(|a| a.start(line))
+    }
+
+    fn observe(&self, model: &DeltaModel, acc: &mut Self::PerMove, run: &Evaluated) {
+        if let (Some(a), Some(acc)) = (self, acc) {
+            a.observe(model, acc, run);
+        }
+    }
+}
+
+/// The forces of the samples in a time span, for a plot: (t, forces) per sample.
+pub struct Window {
+    pub from_s: f64,
+    pub to_s: f64,
+}
+
+impl Observer for Window {
+    type PerMove = Vec<(f64, [f64; 3])>;
+
+    fn start(&self, _: u64) -> Self::PerMove {
+        Vec::new()
+    }
+
+    fn observe(&self, _: &DeltaModel, acc: &mut Self::PerMove, run: &Evaluated) {
+        let (j0, j1) = (run.lanes.start, run.lanes.end);
+        if run.t_s[j0] > self.to_s || run.t_s[j1 - 1] < self.from_s {
+            return;
+        }
+        for j in run.lanes.clone() {
+            let t = run.t_s[j];
+            if run.forces.ok[j] && t >= self.from_s && t <= self.to_s {
+                acc.push((t, run.force_n(j)));
+            }
+        }
+    }
+}
+
+/// The verdict's statistics: each move's peak forces, when and in which phase they came,
+/// and the poses the model could not take.
+pub struct Verdict;
+
+impl Observer for Verdict {
+    type PerMove = MoveStats;
+
+    fn start(&self, line: u64) -> MoveStats {
+        MoveStats::new(line)
+    }
+
+    #[inline(always)]
+    fn observe(&self, model: &DeltaModel, stats: &mut MoveStats, run: &Evaluated) {
+        let (lanes, fo) = (run.lanes.clone(), run.forces);
+        if fo.ok[lanes.clone()].iter().all(|&ok| ok) {
+            let f = &fo.force_n;
+            stats.add_run(
+                &run.t_s[lanes.clone()],
+                &run.phase[lanes.clone()],
+                [
+                    &f[0][lanes.clone()],
+                    &f[1][lanes.clone()],
+                    &f[2][lanes.clone()],
+                ],
+                &fo.energy_residual_w[lanes],
+            );
+            return;
+        }
+        for j in lanes {
+            let t = run.t_s[j];
+            if fo.ok[j] {
+                stats.add(t, run.phase[j], run.force_n(j), fo.energy_residual_w[j]);
+            } else {
+                let (pos, vel, acc) = run.state(j);
+                if let Err(e) = model.evaluate(pos, vel, acc) {
+                    stats.flag(unreachable(e, t, pos));
+                }
+            }
+        }
+    }
+}
+
+/// The problem of a pose the model cannot take.
+pub(super) fn unreachable(e: Unreachable, t_s: f64, pos: Vec3) -> Problem {
+    match e {
+        Unreachable::AboveTop { tower, over_mm } => Problem::AboveHome {
+            t_s,
+            tower,
+            over_mm,
+        },
+        e => Problem::Unreachable {
+            t_s,
+            tower: e.tower(),
+            pos_mm: [pos.x, pos.y, pos.z],
+            reason: e.to_string(),
+        },
+    }
+}

@@ -1,0 +1,117 @@
+//! The trace CSV: one row per sample, its columns defined once by [`TraceRow`].
+
+use serde::Serialize;
+
+use super::observe::{Evaluated, Observer};
+use crate::delta::DeltaModel;
+
+/// One row of the trace CSV: the nozzle's state at one sample, the carriages' (eq. 6-8),
+/// the forces (eq. 14) and both sides of the energy balance (eq. 20). Field names are the
+/// column names.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct TraceRow {
+    pub t_s: f64,
+    pub line: u64,
+    pub x_mm: f64,
+    pub y_mm: f64,
+    pub z_mm: f64,
+    pub vx_mm_s: f64,
+    pub vy_mm_s: f64,
+    pub vz_mm_s: f64,
+    pub ax_mm_s2: f64,
+    pub ay_mm_s2: f64,
+    pub az_mm_s2: f64,
+    pub q1_mm: f64,
+    pub q2_mm: f64,
+    pub q3_mm: f64,
+    pub dq1_mm_s: f64,
+    pub dq2_mm_s: f64,
+    pub dq3_mm_s: f64,
+    pub ddq1_mm_s2: f64,
+    pub ddq2_mm_s2: f64,
+    pub ddq3_mm_s2: f64,
+    pub f1_n: f64,
+    pub f2_n: f64,
+    pub f3_n: f64,
+    pub power_w: f64,
+    pub energy_rate_w: f64,
+}
+
+/// The header line of the trace CSV (with its newline), from [`TraceRow`]'s fields.
+pub fn trace_header() -> String {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    // Serialising a row into a writer with headers writes the header first; only it is kept.
+    let _ = w.serialize(TraceRow::default());
+    let bytes = w.into_inner().unwrap_or_default();
+    let text = String::from_utf8_lossy(&bytes);
+    text.lines()
+        .next()
+        .map_or_else(String::new, |h| format!("{h}\n"))
+}
+
+/// The trace rows of each move, as CSV text (no header). A pose the model cannot take has
+/// no row: the statistics flag it.
+pub struct TraceRows;
+
+impl Observer for TraceRows {
+    type PerMove = Vec<u8>;
+
+    fn start(&self, _: u64) -> Vec<u8> {
+        Vec::new()
+    }
+
+    fn observe(&self, model: &DeltaModel, rows: &mut Vec<u8>, run: &Evaluated) {
+        let mut w = csv::WriterBuilder::new()
+            .has_headers(false)
+            .from_writer(std::mem::take(rows));
+        for j in run.lanes.clone() {
+            let (p, v, a) = run.state(j);
+            let Ok(st) = model.evaluate(p, v, a) else {
+                continue;
+            };
+            let (q, dq, ddq, f) = (st.q_mm, st.dq_mm_s, st.ddq_mm_s2, st.force_n);
+            let _ = w.serialize(TraceRow {
+                t_s: run.t_s[j],
+                line: run.line,
+                x_mm: p.x,
+                y_mm: p.y,
+                z_mm: p.z,
+                vx_mm_s: v.x,
+                vy_mm_s: v.y,
+                vz_mm_s: v.z,
+                ax_mm_s2: a.x,
+                ay_mm_s2: a.y,
+                az_mm_s2: a.z,
+                q1_mm: q[0],
+                q2_mm: q[1],
+                q3_mm: q[2],
+                dq1_mm_s: dq[0],
+                dq2_mm_s: dq[1],
+                dq3_mm_s: dq[2],
+                ddq1_mm_s2: ddq[0],
+                ddq2_mm_s2: ddq[1],
+                ddq3_mm_s2: ddq[2],
+                f1_n: f[0],
+                f2_n: f[1],
+                f3_n: f[2],
+                power_w: st.power_w,
+                energy_rate_w: st.energy_rate_w,
+            });
+        }
+        // Writing into a Vec cannot fail; the rows are handed back.
+        *rows = w.into_inner().unwrap_or_default();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_header_names_every_field_in_order() {
+        let h = trace_header();
+        assert!(h.starts_with("t_s,line,x_mm,y_mm,z_mm,vx_mm_s"), "{h}");
+        assert!(h.ends_with("f3_n,power_w,energy_rate_w\n"), "{h}");
+        assert_eq!(h.split(',').count(), 25);
+    }
+}
