@@ -793,7 +793,7 @@ fn strip_inline_comment(s: &str) -> &str {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use serde_yaml::Value;
+    use yaml_serde::Value;
 
     const Q5: &str = include_str!("../tests/fixtures/klipper/flsun-q5-2020.cfg");
     const KOSSEL: &str = include_str!("../tests/fixtures/klipper/anycubic-kossel-plus-2017.cfg");
@@ -802,7 +802,7 @@ mod tests {
     const Q5_PROFILE: &str = include_str!("../machines/flsun-q5.yaml");
 
     fn parse(p: &ImportedProfile) -> Value {
-        serde_yaml::from_str(&p.yaml).unwrap_or_else(|e| panic!("bad YAML {e}:\n{}", p.yaml))
+        yaml_serde::from_str(&p.yaml).unwrap_or_else(|e| panic!("bad YAML {e}:\n{}", p.yaml))
     }
 
     fn f(v: &Value, path: &str) -> f64 {
@@ -912,7 +912,7 @@ mod tests {
     /// Klipper's Q5 configuration (both come from config/printer-flsun-q5-2020.cfg).
     #[test]
     fn shipped_q5_profile_agrees_with_the_import() {
-        let shipped: Value = serde_yaml::from_str(Q5_PROFILE)
+        let shipped: Value = yaml_serde::from_str(Q5_PROFILE)
             .unwrap_or_else(|e| panic!("machines/flsun-q5.yaml: {e}"));
         let v = parse(&import(Q5, "q5.cfg"));
         for path in [

@@ -134,7 +134,7 @@ impl Machine {
 
     /// Parses and resolves a profile; `origin` names it in error messages.
     pub fn from_yaml_str(text: &str, origin: &str) -> Result<Machine, ProfileError> {
-        let raw: RawMachine = serde_yaml::from_str(text).map_err(|e| schema_error(&e, origin))?;
+        let raw: RawMachine = yaml_serde::from_str(text).map_err(|e| schema_error(&e, origin))?;
         let machine = raw.resolve().and_then(|m| m.validate().map(|()| m));
         machine.map_err(|(key, message)| ProfileError::Invalid {
             origin: origin.to_string(),
@@ -295,9 +295,9 @@ impl Machine {
 const MIN_PERIOD_S: f64 = 1e-6;
 const MAX_PERIOD_S: f64 = 1.0;
 
-/// Turns a serde_yaml error into a [`ProfileError::Schema`], adding the closest valid name
+/// Turns a YAML parser error into a [`ProfileError::Schema`], adding the closest valid name
 /// to an unknown key.
-fn schema_error(e: &serde_yaml::Error, origin: &str) -> ProfileError {
+fn schema_error(e: &yaml_serde::Error, origin: &str) -> ProfileError {
     let mut message = e.to_string();
     if let Some(at) = message.rfind(" at line ") {
         message.truncate(at);
