@@ -16,6 +16,8 @@
 use std::collections::HashMap;
 use std::fmt::Write as _;
 
+use crate::machine::defaults::{self, klipper_reach_mm};
+
 /// The figures Klipper's configuration does not hold.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ImportExtras {
@@ -82,12 +84,6 @@ pub enum ImportError {
     },
 }
 
-/// Klipper's `SLOW_RATIO` (delta.py): the build radius ends where a carriage would move
-/// 4·SLOW_RATIO times faster than the nozzle.
-const SLOW_RATIO: f64 = 3.0;
-const DEFAULT_TOWER_ANGLES_DEG: [f64; 3] = [210.0, 330.0, 90.0];
-const DEFAULT_SAMPLING_PERIOD_S: f64 = 0.001;
-
 /// Reads `cfg_text` (a Klipper `printer.cfg`; `origin` names it in errors and comments) and
 /// produces the machine profile.
 pub fn import_klipper(
@@ -131,7 +127,7 @@ pub fn import_klipper(
     let scv = printer.float(
         &cfg,
         "square_corner_velocity",
-        Some(5.0),
+        Some(defaults::SQUARE_CORNER_VELOCITY_MM_S),
         Bound::AtLeast(0.0),
     )?;
     let mcr = minimum_cruise_ratio(&cfg, printer, max_accel.value)?;
@@ -156,7 +152,12 @@ pub fn import_klipper(
             arms[i] = s.float(&cfg, "arm_length", Some(arm_a.value), arm_bound)?;
             endstops[i] = s.float(&cfg, "position_endstop", Some(endstop_a.value), Bound::Any)?;
         }
-        angles[i] = s.float(&cfg, "angle", Some(DEFAULT_TOWER_ANGLES_DEG[i]), Bound::Any)?;
+        angles[i] = s.float(
+            &cfg,
+            "angle",
+            Some(defaults::TOWER_ANGLES_DEG[i]),
+            Bound::Any,
+        )?;
     }
     // Klipper's build height is the lowest endstop (delta.py `max_z`); the nozzle reaches it
     // at x = y = 0 only when all endstops agree.
@@ -399,7 +400,7 @@ pub fn import_klipper(
     let _ = writeln!(
         y,
         "  period_s: {}  # delta-gcode default",
-        num(DEFAULT_SAMPLING_PERIOD_S)
+        num(defaults::SAMPLING_PERIOD_S)
     );
 
     Ok(ImportedProfile {
@@ -407,15 +408,6 @@ pub fn import_klipper(
         missing,
         notes,
     })
-}
-
-/// Klipper's build-radius limit for a delta (delta.py `ratio_to_xy(4 * SLOW_RATIO)`) with
-/// the half step distance neglected (it changes the radius by far less than 0.1 mm):
-/// the radius where a carriage moves 12 times faster than the nozzle.
-/// Always below `arm − radius`, so the profile's sanity rule arm > radius + print_radius holds.
-pub fn klipper_reach_mm(min_arm_mm: f64, delta_radius_mm: f64) -> f64 {
-    let ratio = 4.0 * SLOW_RATIO;
-    ratio * min_arm_mm / (ratio * ratio + 1.0).sqrt() - delta_radius_mm
 }
 
 /// `[printer] minimum_cruise_ratio` as toolhead.py reads it: given; else from the deprecated
@@ -440,7 +432,7 @@ fn minimum_cruise_ratio(
             ),
         ));
     }
-    Ok((0.5, "Klipper default".into()))
+    Ok((defaults::MINIMUM_CRUISE_RATIO, "Klipper default".into()))
 }
 
 /// Writes a section of figures Klipper does not know; absent ones become `# MISSING:`
@@ -952,17 +944,6 @@ mod tests {
             "{:?}",
             p.notes
         );
-    }
-
-    #[test]
-    fn reach_is_below_arm_minus_radius() {
-        for (arm, r) in [(215.0, 107.5), (300.0, 10.0), (269.0, 134.4)] {
-            let reach = klipper_reach_mm(arm, r);
-            assert!(
-                reach < arm - r && reach > 0.99 * arm - r,
-                "{arm} {r} {reach}"
-            );
-        }
     }
 
     #[test]

@@ -8,6 +8,7 @@ use serde_json::json;
 use super::pose::Format;
 use crate::delta::TOWER_NAMES;
 use crate::machine::Machine;
+use crate::machine::defaults::SLOW_RATIO;
 use crate::path::Vec3;
 
 #[derive(clap::Args, Debug)]
@@ -27,9 +28,6 @@ pub enum Action {
     /// Write a machine profile from a Klipper delta configuration (printer.cfg).
     ImportKlipper(super::import_klipper::Args),
 }
-
-/// Klipper's delta.py SLOW_RATIO: half speed beyond it, quarter speed beyond twice it.
-const SLOW_RATIO: f64 = 3.0;
 
 pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let profile = match (&args.action, &args.profile) {
