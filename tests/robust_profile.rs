@@ -49,7 +49,7 @@ fn assert_error(from: &str, to: &str, fragments: &[&str]) {
 
 #[test]
 fn missing_key() {
-    // serde_yaml places a missing field at the first key of its section (link_kg here).
+    // The YAML parser places a missing field at the first key of its section (link_kg here).
     assert_error(
         "  cart_kg: 0.22",
         "",

@@ -8,6 +8,7 @@ use serde_json::json;
 use super::common::{Format, text_or_json};
 use delta_gcode::delta::TOWER_NAMES;
 use delta_gcode::machine::Machine;
+use delta_gcode::machine::defaults::SLOW_RATIO;
 use delta_gcode::path::Vec3;
 
 #[derive(clap::Args, Debug)]
@@ -28,9 +29,6 @@ pub enum Action {
     /// Write a machine profile from a Klipper delta configuration (printer.cfg).
     ImportKlipper(super::import_klipper::Args),
 }
-
-/// Klipper's delta.py SLOW_RATIO: half speed beyond it, quarter speed beyond twice it.
-const SLOW_RATIO: f64 = 3.0;
 
 pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let profile = match (&args.action, &args.profile) {

@@ -5,6 +5,7 @@
 
 use crate::gcode::{LimitChange, Move};
 use crate::machine::Machine;
+use crate::machine::defaults::SLOW_RATIO;
 use crate::path::Path;
 
 use super::queue::QueuedMove;
@@ -13,9 +14,6 @@ use super::queue::QueuedMove;
 const MIN_KINEMATIC_D_MM: f64 = 1e-9;
 /// The acceleration Klipper gives an extrude-only move before the extruder limits it.
 const EXTRUDE_ONLY_ACCEL_MM_S2: f64 = 99_999_999.9;
-/// delta.py `SLOW_RATIO`: moves are slowed where a carriage runs this many times faster
-/// than the nozzle (half speed), and twice that (quarter speed).
-const SLOW_RATIO: f64 = 3.0;
 
 /// The toolhead limits in force now; M204 / SET_VELOCITY_LIMIT change them for the moves
 /// that follow (toolhead.py `set_max_velocities`, `_calc_junction_deviation`).
