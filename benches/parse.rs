@@ -4,7 +4,7 @@
 use std::hint::black_box;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use delta_gcode::gcode::{LineReader, interpret, parse_line};
+use delta_gcode::gcode::{ArcRules, LineReader, interpret, parse_line};
 use delta_gcode::path::Vec3;
 
 fn corpus() -> Vec<u8> {
@@ -47,7 +47,13 @@ fn bench(c: &mut Criterion) {
     g.bench_function("interpret", |b| {
         b.iter(|| {
             let mut n = 0usize;
-            let stats = interpret(&data[..], Vec3::new(0.0, 0.0, 290.0), |_| n += 1, |_| {});
+            let stats = interpret(
+                &data[..],
+                Vec3::new(0.0, 0.0, 290.0),
+                ArcRules::default(),
+                |_| n += 1,
+                |_| {},
+            );
             black_box((n, stats.ok()))
         })
     });

@@ -6,13 +6,12 @@ use std::hint::black_box;
 use std::path::Path;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use delta_gcode::analysis::{MoveChecker, Scratch};
+use delta_gcode::analysis::{MoveChecker, Scratch, Sequencer};
 use delta_gcode::delta::{BLOCK, ForceBlock, StateBlock};
-use delta_gcode::gcode::{Event, interpret};
+use delta_gcode::gcode::{ArcRules, Event, interpret};
 use delta_gcode::machine::Machine;
 use delta_gcode::path::Vec3;
 use delta_gcode::planner::{PlannedMove, Planner};
-use delta_gcode::resample::sample_move;
 
 fn repo(p: &str) -> String {
     format!("{}/{p}", env!("CARGO_MANIFEST_DIR"))
@@ -23,7 +22,14 @@ fn setup() -> (Machine, Vec<Event>) {
     let data = std::fs::read(repo("samples/calib-cube_cura413_kossel-mini.gcode")).expect("sample");
     let mut events = Vec::new();
     let home = Vec3::new(0.0, 0.0, machine.geometry.home_z_mm);
-    interpret(&data[..], home, |e| events.push(e), |_| {}).expect("read");
+    interpret(
+        &data[..],
+        home,
+        ArcRules::default(),
+        |e| events.push(e),
+        |_| {},
+    )
+    .expect("read");
     (machine, events)
 }
 
@@ -41,7 +47,6 @@ fn bench(c: &mut Criterion) {
     let (machine, events) = setup();
     let moves = plan(&machine, &events);
     let model = machine.model();
-    let period = machine.sampling.period_s;
 
     let mut g = c.benchmark_group("planner");
     g.throughput(Throughput::Elements(moves.len() as u64));
@@ -82,27 +87,27 @@ fn bench(c: &mut Criterion) {
     });
     g.finish();
 
-    // Resampling, the model and the statistics over every planned move of the cube, on one
-    // thread: `check`'s own per-move code.
-    let mut samples = 0u64;
-    for i in 0..moves.len() {
-        sample_move(
-            i.checked_sub(1).map(|j| &moves[j]),
-            &moves[i],
-            moves.get(i + 1),
-            period,
-            &mut |_| samples += 1,
-        );
+    // The sequential stages (shaper, drive) into one batch; then the sampling, the model
+    // and the statistics over it, on one thread: `check`'s own per-move code.
+    let geometry = MoveChecker::new(&machine, ());
+    let mut sequencer = Sequencer::new(&machine, &geometry);
+    for mv in &moves {
+        sequencer.push(mv);
     }
+    sequencer.finish();
+    let batch = sequencer.take_batch(true);
     let checker = MoveChecker::new(&machine, ());
     let mut scratch = Box::<Scratch>::default();
+    let mut out = Vec::new();
+    checker.check_moves(&mut scratch, &batch.pieces, &batch.moves, &mut out);
+    let samples: u64 = out.iter().map(|r| r.stats.samples).sum();
     let mut g = c.benchmark_group("resample_and_model");
     g.throughput(Throughput::Elements(samples));
     g.sample_size(10);
     g.bench_function("cube", |b| {
         b.iter(|| {
-            let mut out = Vec::with_capacity(moves.len());
-            checker.check_run(&mut scratch, None, &moves, None, &mut out);
+            let mut out = Vec::with_capacity(batch.moves.len());
+            checker.check_moves(&mut scratch, &batch.pieces, &batch.moves, &mut out);
             let peak = out
                 .iter()
                 .map(|r| r.stats.peak_force_n[0])

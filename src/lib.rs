@@ -12,6 +12,7 @@ pub mod emit;
 pub mod gcode;
 pub mod klipper_import;
 pub mod machine;
+pub mod motion;
 pub mod path;
 pub mod planner;
 pub mod plot;

@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use std::fs::File;
 use std::time::Instant;
 
-use delta_gcode::gcode::{Event, Severity, interpret};
+use delta_gcode::gcode::{ArcRules, Event, Severity, interpret};
 use delta_gcode::path::Vec3;
 
 const FILES: [&str; 4] = [
@@ -31,6 +31,7 @@ fn corpus_reads_without_errors() {
         let stats = interpret(
             std::io::BufReader::new(file),
             Vec3::new(0.0, 0.0, 290.0),
+            ArcRules::default(),
             |e| {
                 if let Event::Move(m) = e {
                     let p = m.path;
@@ -66,7 +67,14 @@ fn corpus_reads_without_errors() {
         let data = std::fs::read(f).unwrap();
         let t0 = Instant::now();
         let mut n = 0u64;
-        interpret(&data[..], Vec3::new(0.0, 0.0, 290.0), |_| n += 1, |_| {}).unwrap();
+        interpret(
+            &data[..],
+            Vec3::new(0.0, 0.0, 290.0),
+            ArcRules::default(),
+            |_| n += 1,
+            |_| {},
+        )
+        .unwrap();
         let dt = t0.elapsed().as_secs_f64();
         eprintln!(
             "  interpret from memory: {n} events, {:.3} s, {:.1} MB/s",

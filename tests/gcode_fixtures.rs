@@ -4,8 +4,11 @@
 use std::collections::BTreeMap;
 
 use delta_gcode::emit::{emit, strip};
-use delta_gcode::gcode::{Command, Diagnostic, Event, ReadStats, Severity, interpret, parse_line};
-use delta_gcode::path::{Path, Vec3};
+use delta_gcode::gcode::Move;
+use delta_gcode::gcode::{
+    ArcRules, Command, Diagnostic, Event, ReadStats, Severity, interpret, parse_line,
+};
+use delta_gcode::path::Vec3;
 
 fn fixture(name: &str) -> Vec<u8> {
     let p = format!("{}/tests/fixtures/{name}", env!("CARGO_MANIFEST_DIR"));
@@ -18,6 +21,7 @@ fn read(src: &[u8]) -> (Vec<Event>, Vec<Diagnostic>, ReadStats) {
     let stats = interpret(
         src,
         Vec3::new(0.0, 0.0, 290.0),
+        ArcRules::default(),
         |e| ev.push(e),
         |x| d.push(x),
     )
@@ -35,17 +39,24 @@ fn flsun_start_code_has_the_helix() {
     let (ev, d, stats) = read(&src);
     assert!(d.is_empty(), "{d:?}");
     assert_eq!(stats.lines, 300);
-    let arc = ev
+    // The G3 of line 28 as Klipper's chords: a quarter circle of r = 98 (153.9 mm),
+    // 153 chords on the circle, E shared evenly.
+    let chords: Vec<&Move> = ev
         .iter()
-        .find_map(|e| match e {
-            Event::Move(m) if matches!(m.path, Path::Arc(_)) => Some(*m),
+        .filter_map(|e| match e {
+            Event::Move(m) if m.line == 28 => Some(m),
             _ => None,
         })
-        .unwrap();
-    assert_eq!(arc.line, 28);
-    assert!((arc.path.start() - Vec3::new(-98.0, 0.0, 0.2)).norm() < 1e-12);
-    assert!((arc.path.end() - Vec3::new(0.0, -98.0, 0.2)).norm() < 1e-9);
-    assert_eq!(arc.e_mm, 40.0);
+        .collect();
+    assert_eq!(stats.arcs, 1);
+    assert_eq!(chords.len(), 153);
+    assert!((chords[0].path.start() - Vec3::new(-98.0, 0.0, 0.2)).norm() < 1e-12);
+    assert!((chords[152].path.end() - Vec3::new(0.0, -98.0, 0.2)).norm() < 1e-9);
+    for c in &chords {
+        assert!((c.path.end().xy().norm() - 98.0).abs() < 1e-9);
+    }
+    let e: f64 = chords.iter().map(|c| c.e_mm).sum();
+    assert!((e - 40.0).abs() < 1e-9);
     // G28 on line 20 is a stop.
     assert!(ev.contains(&Event::Stop {
         line: 20,
@@ -67,17 +78,32 @@ fn ps29_arcs_and_exclude_object() {
     assert!(arc_lines > 100);
     assert_eq!(stats.arcs, arc_lines);
     // Line 57: G3 X2.643 Y-23.072 I1.297 J25.032 E.17852, from (-1.2, -23.168).
-    let m = ev
+    // Centre (0.097, 1.864), radius 25.066, a counter-clockwise sweep of 0.155 rad
+    // (3.88 mm): 3 chords.
+    let chords: Vec<&Move> = ev
         .iter()
-        .find_map(|e| match e {
-            Event::Move(m) if m.line == 57 => Some(*m),
+        .filter_map(|e| match e {
+            Event::Move(m) if m.line == 57 => Some(m),
             _ => None,
         })
-        .unwrap();
-    let Path::Arc(a) = m.path else { panic!() };
-    assert!((a.center_mm[0] - 0.097).abs() < 1e-9 && (a.center_mm[1] - 1.864).abs() < 1e-9);
-    assert!(a.sweep_rad > 0.0 && a.sweep_rad < 0.2);
-    assert_eq!(m.e_mm, 0.17852);
+        .collect();
+    assert_eq!(chords.len(), 3);
+    let centre = Vec3::new(0.097, 1.864, 0.0);
+    let r = 1.297_f64.hypot(25.032);
+    for c in &chords[..2] {
+        let d = c.path.end() - centre;
+        assert!((d.xy().norm() - r).abs() < 1e-9);
+    }
+    // The last chord ends on the written end point, 3 µm off the circle (slicer rounding).
+    assert_eq!(
+        chords[2].path.end().xy(),
+        Vec3::new(2.643, -23.072, 0.0).xy()
+    );
+    assert!(
+        chords
+            .iter()
+            .all(|c| (c.e_mm - 0.17852 / 3.0).abs() < 1e-12)
+    );
     // The EXCLUDE_OBJECT_DEFINE lines keep their parameters.
     let l27 = text.lines().nth(26).unwrap();
     let p = parse_line(l27.as_bytes());

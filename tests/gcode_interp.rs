@@ -2,8 +2,8 @@
 
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
-use delta_gcode::gcode::{Diagnostic, Event, LimitChange, Move, Severity, interpret};
-use delta_gcode::path::{Path, Vec3};
+use delta_gcode::gcode::{ArcRules, Diagnostic, Event, LimitChange, Move, Severity, interpret};
+use delta_gcode::path::Vec3;
 
 const HOME: [f64; 3] = [0.0, 0.0, 290.0];
 
@@ -13,6 +13,7 @@ fn run(src: &str) -> (Vec<Event>, Vec<Diagnostic>) {
     let stats = interpret(
         src.as_bytes(),
         Vec3::from(HOME),
+        ArcRules::default(),
         |e| events.push(e),
         |d| diags.push(d),
     )
@@ -36,10 +37,7 @@ fn v(x: f64, y: f64, z: f64) -> Vec3 {
 }
 
 fn line(m: &Move) -> (Vec3, Vec3) {
-    match m.path {
-        Path::Line { start, end } => (start, end),
-        Path::Arc(_) => panic!("arc at line {}", m.line),
-    }
+    (m.path.start, m.path.end)
 }
 
 #[test]
@@ -105,60 +103,92 @@ fn zero_length_moves_without_e_give_nothing() {
 
 #[test]
 fn flsun_helix_start() {
-    // The FLSUN Q5 vendor start code: a quarter turn round the bed centre, E 40.
+    // The FLSUN Q5 vendor start code: a quarter turn round the bed centre, E 40, cut as
+    // Klipper does into ⌊98·π/2⌋ = 153 chords of 1.006 mm.
     let (ev, d) = run("G28\nM83\nG1 X-98 Y0 Z0.2 F4000\nG3 X0 Y-98 I98 Z0.2 E40 F400\n");
     assert!(d.is_empty());
     let m = moves(&ev);
-    let Path::Arc(a) = m[1].path else {
-        panic!("not an arc")
-    };
-    assert_eq!(a.center_mm, [0.0, 0.0]);
-    assert_eq!(a.radius_mm, 98.0);
-    assert!((a.sweep_rad - FRAC_PI_2).abs() < 1e-12);
-    assert!((m[1].path.length_mm() - 98.0 * FRAC_PI_2).abs() < 1e-9);
-    assert_eq!((m[1].e_mm, m[1].line), (40.0, 4));
-    assert!((m[1].feed_mm_s - 400.0 / 60.0).abs() < 1e-12);
+    let chords = &m[1..];
+    assert_eq!(chords.len(), 153);
+    let step = FRAC_PI_2 / 153.0;
+    for (i, c) in chords.iter().enumerate() {
+        let th = PI + step * (i + 1) as f64;
+        let want = v(98.0 * th.cos(), 98.0 * th.sin(), 0.2);
+        assert!((c.path.end - want).norm() < 1e-9, "chord {i}");
+        assert_eq!(c.line, 4);
+        assert!((c.feed_mm_s - 400.0 / 60.0).abs() < 1e-12);
+        assert!((c.e_mm - 40.0 / 153.0).abs() < 1e-12);
+    }
+    assert_eq!(chords[152].path.end, v(0.0, -98.0, 0.2));
 }
 
 #[test]
 fn helix_with_z_rise_and_full_circles() {
-    let (ev, d) = run("G28\nG1 X10 Y0 Z0\nG2 I-10 Z2\nG3 X10 Y0 I-10 J0 Z3\nG2 X0 Y10 R-10\n");
+    let (ev, d) = run("G28\nG1 X10 Y0 Z0\nG2 I-10 Z2\nG3 X10 Y0 I-10 J0 Z3\n");
     assert!(d.is_empty(), "{d:?}");
     let m = moves(&ev);
-    let arcs: Vec<_> = m[1..]
-        .iter()
-        .map(|m| match m.path {
-            Path::Arc(a) => a,
-            Path::Line { .. } => panic!(),
-        })
-        .collect();
-    // Clockwise full circle rising 2 mm: length √((2π·10)² + 2²).
-    assert_eq!(arcs[0].sweep_rad, -TAU);
-    assert_eq!((arcs[0].z_start_mm, arcs[0].z_delta_mm), (0.0, 2.0));
-    assert!((m[1].path.length_mm() - (TAU * 10.0).hypot(2.0)).abs() < 1e-9);
-    assert_eq!(arcs[1].sweep_rad, TAU);
-    // R-10 clockwise from (10,0) to (0,10): the long way, -3π/2 about the origin.
-    assert!((arcs[2].sweep_rad + 1.5 * PI).abs() < 1e-12);
-    assert!(arcs[2].center_mm[0].abs() < 1e-12 && arcs[2].center_mm[1].abs() < 1e-12);
+    // Clockwise full circle rising 2 mm: √((2π·10)² + 2²) = 62.86 mm, 62 chords; then the
+    // counter-clockwise one rising 1 mm: 62.84 mm, 62 chords.
+    assert_eq!(m.len(), 1 + 62 + 62);
+    let first = &m[1..63];
+    for (i, c) in first.iter().enumerate() {
+        let th = -TAU * (i + 1) as f64 / 62.0;
+        let want = v(
+            10.0 * th.cos(),
+            10.0 * th.sin(),
+            2.0 * (i + 1) as f64 / 62.0,
+        );
+        assert!(
+            (c.path.end - want).norm() < 1e-9,
+            "chord {i}: {}",
+            c.path.end
+        );
+    }
+    // The second turns the other way: its first chord ends above the X axis.
+    assert!(m[63].path.end.y > 0.0 && m[63].path.end.z > 2.0);
+    assert_eq!(m[124].path.end, v(10.0, 0.0, 3.0));
 }
 
 #[test]
-fn arc_problems() {
-    let (ev, d) = run("G28\nG1 X10 Y0\nG3 X0 Y11 I-10\nG2 X1 Y1\nG3 X20 Y0 R1\nG18\nG2 X0 I1\n");
-    // The mismatched arc still runs (as the firmware does), with a warning.
-    assert_eq!(moves(&ev).len(), 2);
+fn arc_planes_follow_g17_g18_g19() {
+    // G18: the XZ plane, centre from I and K, Y linear. From (0, 0, 10) round (0, _, 5).
+    let (ev, d) = run("G28\nG1 X0 Y0 Z10\nG18\nG2 X5 Y2 Z5 I0 K-5\nG17\n");
+    assert!(d.is_empty(), "{d:?}");
+    let m = moves(&ev);
+    let arc = &m[1..];
+    // A clockwise quarter turn of r = 5 (7.854 mm) rising 2 mm in Y: 8.105 mm, 8 chords.
+    assert_eq!(arc.len(), 8);
+    for c in &arc[..arc.len() - 1] {
+        let p = c.path.end;
+        assert!((p.x.hypot(p.z - 5.0) - 5.0).abs() < 1e-9, "{p}");
+    }
+    assert_eq!(arc[arc.len() - 1].path.end, v(5.0, 2.0, 5.0));
+}
+
+#[test]
+fn arcs_klipper_refuses_are_errors() {
+    let src = "G28\nG1 X10 Y0 Z5\nG3 X0 Y11 I-10\nG2 X1 Y1\nG3 X20 Y0 R1\nG91\nG2 X1 I1\nG90\nG2 X5 I1 P2\n";
+    let (ev, d) = run(src);
     let sev: Vec<(u64, Severity)> = d.iter().map(|d| (d.line, d.severity)).collect();
     assert_eq!(
         sev,
         vec![
-            (3, Severity::Warning),
             (4, Severity::Error),
             (5, Severity::Error),
-            (6, Severity::Warning),
-            (7, Severity::Error)
+            (7, Severity::Error),
+            (9, Severity::Warning)
         ]
     );
-    assert!(d[0].message.contains("1.0000 mm off"), "{}", d[0].message);
+    assert!(d[1].message.contains("R"), "{}", d[1].message);
+    assert!(d[2].message.contains("relative"), "{}", d[2].message);
+    // The arc whose end is off its circle still runs, as in Klipper: its last chord goes to
+    // the end point.
+    let m = moves(&ev);
+    assert!(
+        m.iter()
+            .any(|c| c.line == 3 && c.path.end == v(0.0, 11.0, 5.0))
+    );
+    assert!(m.iter().any(|c| c.line == 9));
 }
 
 #[test]
@@ -275,6 +305,7 @@ fn unknown_commands_are_counted_and_t_is_not_a_move() {
     let stats = interpret(
         &b"M104 S215 T1\nT0\nPRINT_START BED=60\nM117 G1 X5\nG29.1\n; G1 X9\n"[..],
         Vec3::from(HOME),
+        ArcRules::default(),
         |_| n += 1,
         |_| {},
     )
@@ -293,6 +324,7 @@ fn overlong_line_is_a_warning_and_reading_goes_on() {
     let stats = interpret(
         &src[..],
         Vec3::from(HOME),
+        ArcRules::default(),
         |_| moves += 1,
         |d| diags.push(d),
     )
@@ -319,6 +351,7 @@ fn crlf_comments_and_missing_final_newline_give_the_same_events() {
     interpret(
         &raw[..],
         Vec3::from(HOME),
+        ArcRules::default(),
         |e| ev.push(e),
         |x| diags.push(x),
     )

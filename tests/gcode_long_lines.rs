@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 use std::io::{self, Read, Write};
 
 use delta_gcode::emit::emit;
-use delta_gcode::gcode::{Severity, interpret};
+use delta_gcode::gcode::{ArcRules, Severity, interpret};
 use delta_gcode::path::Vec3;
 
 const LEN: u64 = 50 << 20;
@@ -44,6 +44,7 @@ fn fifty_megabyte_line() {
     let stats = interpret(
         input(),
         Vec3::new(0.0, 0.0, 200.0),
+        ArcRules::default(),
         |_| events += 1,
         |d| diags.push(d),
     )

@@ -4,8 +4,8 @@
 use std::collections::BTreeMap;
 
 use delta_gcode::emit::{emit, strip};
-use delta_gcode::gcode::{Event, interpret, parse_line};
-use delta_gcode::path::{Path, Vec3};
+use delta_gcode::gcode::{ArcRules, Event, interpret, parse_line};
+use delta_gcode::path::Vec3;
 use proptest::prelude::*;
 
 /// Bytes that look like G-code often enough to reach deep into the interpreter.
@@ -38,22 +38,7 @@ fn gcode_like() -> impl Strategy<Value = Vec<u8>> {
 fn finite_event(e: &Event) -> bool {
     match e {
         Event::Move(m) => {
-            let path_ok = match m.path {
-                Path::Line { start, end } => start.iter().chain(end.iter()).all(|v| v.is_finite()),
-                Path::Arc(a) => {
-                    [
-                        a.center_mm[0],
-                        a.center_mm[1],
-                        a.radius_mm,
-                        a.start_angle_rad,
-                        a.sweep_rad,
-                    ]
-                    .iter()
-                    .chain(&[a.z_start_mm, a.z_delta_mm])
-                    .all(|v| v.is_finite())
-                        && a.radius_mm > 0.0
-                }
-            };
+            let path_ok = m.path.is_finite();
             path_ok
                 && m.e_mm.is_finite()
                 && m.feed_mm_s.is_finite()
@@ -85,6 +70,7 @@ fn check_reading(data: &[u8]) {
     let stats = interpret(
         data,
         Vec3::new(0.0, 0.0, 250.0),
+        ArcRules::default(),
         |e| {
             if !finite_event(&e) {
                 bad.push(e);

@@ -1,6 +1,6 @@
-//! The pipeline over one G-code stream: reader → interpreter → planner (sequential) →
-//! resampler + delta model + statistics (in parallel over batches of planned moves, results
-//! back in file order).
+//! The pipeline over one G-code stream: reader → interpreter → planner → planned pieces →
+//! input shaper → drive (sequential) → sampler + delta model + observers (in parallel over
+//! batches of pieces, results back in file order).
 
 use std::collections::{BTreeSet, HashMap};
 use std::fs::File;
@@ -14,29 +14,34 @@ use rayon::prelude::*;
 
 use crate::gcode::{self, Diagnostic, Event, ReadStats, Severity};
 use crate::machine::Machine;
+use crate::path::Vec3;
 use crate::planner::{PlannedMove, Planner};
 use crate::report::{MAX_LISTED, MoveStats, Report};
 
 mod move_check;
 mod observe;
+mod sequence;
 mod trace;
 
 pub use move_check::{MoveChecker, Scratch};
 pub use observe::{Evaluated, Observer, Verdict, Window};
+pub use sequence::{Batch, MoveWork, Sequencer};
 pub use trace::{TraceRow, TraceRows, trace_header};
 
 /// The progress bar's move count is updated this often.
 const PROGRESS_EVERY_MOVES: u64 = 4096;
 
-/// Planned moves handed to the parallel stage at a time.
-const BATCH: usize = 4096;
+/// Pieces of the actual motion handed to the parallel stage at a time.
+const BATCH: usize = 8192;
 
 /// Consecutive moves checked by one rayon task (their samples share the model's blocks).
 const CHUNK: usize = 64;
 
-/// What the model found for one planned move: the verdict's statistics and what the
-/// run's observer kept of it.
+/// What the model found for one G-code line's motion: the verdict's statistics and what
+/// the run's observer kept of it.
 pub struct MoveResult<P> {
+    /// The line's group in the run (see [`MoveWork::group`]).
+    pub group: u64,
     pub stats: MoveStats,
     pub observed: P,
     /// Where the move ends on the bed, mm.
@@ -46,19 +51,21 @@ pub struct MoveResult<P> {
 /// Totals of one run, besides the per-move results.
 pub struct RunTotals {
     pub read: ReadStats,
+    /// The commanded motion's duration, s.
     pub print_time_s: f64,
 }
 
-/// Batches in flight between the planner and the model stage: bounds the memory.
+/// Batches in flight between the sequential stages and the sampling: bounds the memory.
 const BATCHES_IN_FLIGHT: usize = 2;
 
-/// Runs the pipeline over `input`. `on_move` gets every planned move's result in file order
+/// Runs the pipeline over `input`. `on_move` gets every G-code line's result in file order
 /// (the verdict's statistics and what `observer` kept), `on_diag` every diagnostic of the
 /// reader.
 ///
-/// The reader, interpreter and planner run on this thread; the model stage runs on another,
-/// fed batches of planned moves through a bounded channel, and spreads each batch over the
-/// rayon pool. So the sequential stages overlap the parallel one, and memory stays bounded.
+/// The reader, interpreter, planner, shaper and drive run on this thread; the sampling, the
+/// model and the observers run on another, fed batches of pieces through a bounded
+/// channel, and spread each batch over the rayon pool. So the sequential stages overlap
+/// the parallel one, and memory stays bounded.
 pub fn run<R: Read, O: Observer>(
     input: R,
     machine: &Machine,
@@ -66,94 +73,98 @@ pub fn run<R: Read, O: Observer>(
     mut on_move: impl FnMut(MoveResult<O::PerMove>) + Send,
     on_diag: impl FnMut(Diagnostic),
 ) -> io::Result<RunTotals> {
-    let (to_model, batches) = mpsc::sync_channel::<Vec<PlannedMove>>(BATCHES_IN_FLIGHT);
+    let (to_model, batches) = mpsc::sync_channel::<Batch>(BATCHES_IN_FLIGHT);
     std::thread::scope(|scope| {
         let model = scope.spawn(move || {
-            let mut stage = ModelStage::new(machine, observer);
+            let mut stage = ModelStage {
+                checker: MoveChecker::new(machine, observer),
+                pending: None,
+            };
             for batch in batches {
-                stage.pending.extend(batch);
-                stage.process(false, &mut on_move);
+                stage.process(&batch, &mut on_move);
             }
-            stage.process(true, &mut on_move);
+            if let Some(last) = stage.pending.take() {
+                on_move(last);
+            }
         });
+        let geometry = MoveChecker::new(machine, ());
+        let mut sequencer = Sequencer::new(machine, &geometry);
         let mut planner = Planner::new(machine);
-        let home = nalgebra::Vector3::new(0.0, 0.0, machine.geometry.home_z_mm);
-        let mut planned = Vec::with_capacity(2 * BATCH);
+        let home = Vec3::new(0.0, 0.0, machine.geometry.home_z_mm);
+        let mut planned = Vec::new();
         // A send fails only when the model stage has stopped, and then its panic is
         // re-raised by the join below.
+        let hand_on = |planned: &mut Vec<PlannedMove>, sequencer: &mut Sequencer| {
+            for mv in planned.drain(..) {
+                sequencer.push(&mv);
+            }
+            if sequencer.pending_pieces() >= BATCH {
+                let _ = to_model.send(sequencer.take_batch(false));
+            }
+        };
         let read = gcode::interpret(
             input,
             home,
+            machine.arc_rules,
             |event: Event| {
                 planner.push(event, &mut planned);
-                if planned.len() >= BATCH {
-                    let full = std::mem::replace(&mut planned, Vec::with_capacity(2 * BATCH));
-                    let _ = to_model.send(full);
+                if !planned.is_empty() {
+                    hand_on(&mut planned, &mut sequencer);
                 }
             },
             on_diag,
         );
         planner.finish(&mut planned);
-        let _ = to_model.send(planned);
+        hand_on(&mut planned, &mut sequencer);
+        sequencer.finish();
+        let print_time_s = sequencer.commanded_span_s();
+        let _ = to_model.send(sequencer.take_batch(true));
         drop(to_model);
         if let Err(panic) = model.join() {
             std::panic::resume_unwind(panic);
         }
         Ok(RunTotals {
             read: read?,
-            print_time_s: planner.print_time_s(),
+            print_time_s,
         })
     })
 }
 
-/// The parallel stage: planned moves waiting for their model run.
-struct ModelStage<'m, O> {
+/// The parallel stage.
+struct ModelStage<'m, O: Observer> {
     checker: MoveChecker<'m, O>,
-    pending: Vec<PlannedMove>,
-    /// The last move processed: the previous move of the next batch's first.
-    prev: Option<PlannedMove>,
+    /// The last result so far: the next batch may continue its line.
+    pending: Option<MoveResult<O::PerMove>>,
 }
 
-impl<'m, O: Observer> ModelStage<'m, O> {
-    fn new(machine: &'m Machine, observer: O) -> Self {
-        ModelStage {
-            checker: MoveChecker::new(machine, observer),
-            pending: Vec::new(),
-            prev: None,
-        }
-    }
-
-    /// Runs the model over the pending moves. All but the last are run unless `last`: the
-    /// last one's junction with the move after it is not known yet.
-    fn process(&mut self, last: bool, on_move: &mut impl FnMut(MoveResult<O::PerMove>)) {
-        let n = if last {
-            self.pending.len()
-        } else {
-            self.pending.len().saturating_sub(1)
-        };
-        if n == 0 {
-            return;
-        }
-        let pending = &self.pending;
-        let prev = self.prev;
+impl<O: Observer> ModelStage<'_, O> {
+    /// Samples a batch's moves over the rayon pool, chunks of moves per task, and hands on
+    /// their results in order, the parts of a line split between batches joined.
+    fn process(&mut self, batch: &Batch, on_move: &mut impl FnMut(MoveResult<O::PerMove>)) {
+        let n = batch.moves.len();
+        let checker = &self.checker;
         let results: Vec<Vec<MoveResult<O::PerMove>>> = (0..n.div_ceil(CHUNK))
             .into_par_iter()
             .map_init(Box::<Scratch>::default, |scratch, c| {
                 let run = c * CHUNK..n.min((c + 1) * CHUNK);
-                let before = match run.start {
-                    0 => prev.as_ref(),
-                    i => pending.get(i - 1),
-                };
                 let mut out = Vec::with_capacity(run.len());
-                let after = pending.get(run.end);
-                self.checker
-                    .check_run(scratch, before, &pending[run], after, &mut out);
+                checker.check_moves(scratch, &batch.pieces, &batch.moves[run], &mut out);
                 out
             })
             .collect();
-        results.into_iter().flatten().for_each(&mut *on_move);
-        self.prev = Some(self.pending[n - 1]);
-        self.pending.drain(..n);
+        for r in results.into_iter().flatten() {
+            match &mut self.pending {
+                Some(p) if p.group == r.group => {
+                    p.stats.merge(&r.stats);
+                    checker.observer().merge(&mut p.observed, r.observed);
+                }
+                _ => {
+                    if let Some(done) = self.pending.replace(r) {
+                        on_move(done);
+                    }
+                }
+            }
+        }
     }
 }
 

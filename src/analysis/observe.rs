@@ -5,9 +5,9 @@
 use std::ops::Range;
 
 use crate::delta::{DeltaModel, ForceBlock, StateBlock, Unreachable};
+use crate::motion::Phase;
 use crate::path::Vec3;
 use crate::report::{MoveStats, Problem};
-use crate::resample::Phase;
 
 /// A run of consecutive samples of one move, evaluated in one block.
 pub struct Evaluated<'a> {
@@ -16,6 +16,8 @@ pub struct Evaluated<'a> {
     pub t_s: &'a [f64],
     pub phase: &'a [Phase],
     pub states: &'a StateBlock,
+    /// The commanded positions, mm (one array per coordinate).
+    pub cmd_pos_mm: &'a [[f64; crate::delta::BLOCK]; 3],
     pub forces: &'a ForceBlock,
     /// The run's lanes in the block (and in `t_s`, `phase`).
     pub lanes: Range<usize>,
@@ -27,6 +29,12 @@ impl Evaluated<'_> {
         let v3 = |c: &[[f64; crate::delta::BLOCK]; 3]| Vec3::new(c[0][j], c[1][j], c[2][j]);
         let s = self.states;
         (v3(&s.pos_mm), v3(&s.vel_mm_s), v3(&s.acc_mm_s2))
+    }
+
+    /// The commanded position of lane `j`, mm.
+    pub fn cmd_pos(&self, j: usize) -> Vec3 {
+        let c = self.cmd_pos_mm;
+        Vec3::new(c[0][j], c[1][j], c[2][j])
     }
 
     /// The forces of lane `j`, N.
@@ -46,6 +54,9 @@ pub trait Observer: Send + Sync {
 
     /// Takes a run of the move's evaluated samples (in time order, runs in time order).
     fn observe(&self, model: &DeltaModel, acc: &mut Self::PerMove, run: &Evaluated);
+
+    /// Appends what was kept of a later part of the same move.
+    fn merge(&self, acc: &mut Self::PerMove, later: Self::PerMove);
 }
 
 /// Observes nothing: a plain check.
@@ -56,6 +67,8 @@ impl Observer for () {
 
     #[inline(always)]
     fn observe(&self, _: &DeltaModel, _: &mut (), _: &Evaluated) {}
+
+    fn merge(&self, _: &mut (), _: ()) {}
 }
 
 /// Two observers of the same runs.
@@ -70,6 +83,11 @@ impl<A: Observer, B: Observer> Observer for (A, B) {
         self.0.observe(model, &mut acc.0, run);
         self.1.observe(model, &mut acc.1, run);
     }
+
+    fn merge(&self, acc: &mut Self::PerMove, later: Self::PerMove) {
+        self.0.merge(&mut acc.0, later.0);
+        self.1.merge(&mut acc.1, later.1);
+    }
 }
 
 /// An observer that may be absent.
@@ -83,6 +101,12 @@ impl<A: Observer> Observer for Option<A> {
     fn observe(&self, model: &DeltaModel, acc: &mut Self::PerMove, run: &Evaluated) {
         if let (Some(a), Some(acc)) = (self, acc) {
             a.observe(model, acc, run);
+        }
+    }
+
+    fn merge(&self, acc: &mut Self::PerMove, later: Self::PerMove) {
+        if let (Some(a), Some(acc), Some(later)) = (self, acc, later) {
+            a.merge(acc, later);
         }
     }
 }
@@ -111,6 +135,10 @@ impl Observer for Window {
                 acc.push((t, run.force_n(j)));
             }
         }
+    }
+
+    fn merge(&self, acc: &mut Self::PerMove, later: Self::PerMove) {
+        acc.extend(later);
     }
 }
 
@@ -153,6 +181,10 @@ impl Observer for Verdict {
                 }
             }
         }
+    }
+
+    fn merge(&self, stats: &mut MoveStats, later: MoveStats) {
+        stats.merge(&later);
     }
 }
 

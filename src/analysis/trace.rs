@@ -101,6 +101,10 @@ impl Observer for TraceRows {
         // Writing into a Vec cannot fail; the rows are handed back.
         *rows = w.into_inner().unwrap_or_default();
     }
+
+    fn merge(&self, rows: &mut Vec<u8>, later: Vec<u8>) {
+        rows.extend(later);
+    }
 }
 
 #[cfg(test)]

@@ -1,252 +1,253 @@
-//! G2/G3 geometry: centre from I/J or R, signed sweep, helical Z.
+//! G2/G3 as the firmware runs them: cut into straight chords, each an ordinary move.
+//! Klipper's rules are those of klippy/extras/gcode_arcs.py (`planArc`).
 
 use std::f64::consts::TAU;
 
-use crate::path::{Arc, Vec3};
+use crate::path::Vec3;
 
-/// End points closer than this (mm, in XY) make an I/J arc a full circle.
-pub const FULL_CIRCLE_MM: f64 = 1e-6;
-
-/// Allowed difference between the start and end radius: this absolute part (mm) plus
-/// [`RADIUS_REL_TOL`] times the radius. Beyond it the arc is reported (the firmware still
-/// runs it with the start radius, as here).
-pub const RADIUS_ABS_TOL_MM: f64 = 0.01;
-pub const RADIUS_REL_TOL: f64 = 1e-3;
-
-/// How the centre of an arc is given.
-#[derive(Clone, Copy, Debug)]
-pub enum Centre {
-    /// I/J: offset of the centre from the start point, mm.
-    Offset([f64; 2]),
-    /// R: radius, mm; negative selects the arc longer than a half turn (Marlin).
-    Radius(f64),
+/// The plane of G2/G3: G17 (XY, centre from I and J), G18 (XZ, from I and K) or G19 (YZ,
+/// from J and K); the third axis moves linearly (a helix).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Plane {
+    Xy,
+    Xz,
+    Yz,
 }
 
-/// Why an arc cannot be built.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum ArcError {
-    /// The centre coincides with the start point.
-    ZeroRadius,
-    /// R form: the end point is farther than 2|R| from the start, by this much (mm).
-    RadiusTooSmall(f64),
-    /// R form with the end point equal to the start: the centre is undefined.
-    RadiusFullCircle,
-}
-
-/// The arc from `start` to `end` (XY circle, linear Z) and the start/end radius mismatch,
-/// mm. `clockwise` is G2; `turns` adds whole extra circles (Marlin's P).
-pub fn arc(
-    start: Vec3,
-    end: Vec3,
-    centre: Centre,
-    clockwise: bool,
-    turns: u32,
-) -> Result<(Arc, f64), ArcError> {
-    let (dx, dy) = (end.x - start.x, end.y - start.y);
-    let chord = dx.hypot(dy);
-    let offset = match centre {
-        Centre::Offset(o) => o,
-        Centre::Radius(r) => {
-            if chord < FULL_CIRCLE_MM {
-                return Err(ArcError::RadiusFullCircle);
-            }
-            let h2 = r * r - chord * chord / 4.0;
-            let h = if h2 >= 0.0 {
-                h2.sqrt()
-            } else if chord / 2.0 - r.abs() <= RADIUS_ABS_TOL_MM + RADIUS_REL_TOL * r.abs() {
-                // Rounding in the file: the half-circle.
-                0.0
-            } else {
-                return Err(ArcError::RadiusTooSmall(chord / 2.0 - r.abs()));
-            };
-            // Centre to the left of the chord for a short counter-clockwise arc; right for
-            // clockwise; a negative R takes the other side (the long arc).
-            let side = if clockwise == (r < 0.0) { 1.0 } else { -1.0 };
-            let (lx, ly) = (-dy / chord, dx / chord);
-            [dx / 2.0 + side * h * lx, dy / 2.0 + side * h * ly]
+impl Plane {
+    /// The axes (0 = X) of the plane's two coordinates and of the helical axis.
+    pub fn axes(self) -> [usize; 3] {
+        match self {
+            Plane::Xy => [0, 1, 2],
+            Plane::Xz => [0, 2, 1],
+            Plane::Yz => [1, 2, 0],
         }
-    };
-    let radius = offset[0].hypot(offset[1]);
-    if radius == 0.0 {
-        return Err(ArcError::ZeroRadius);
     }
-    let center = [start.x + offset[0], start.y + offset[1]];
-    // Vectors from the centre to the start and to the end.
-    let (sx, sy) = (-offset[0], -offset[1]);
-    let (ex, ey) = (end.x - center[0], end.y - center[1]);
-    let end_radius = ex.hypot(ey);
-    let raw = (sx * ey - sy * ex).atan2(sx * ex + sy * ey);
-    let mut sweep = match (chord < FULL_CIRCLE_MM, clockwise) {
-        (true, false) => TAU,
-        (true, true) => -TAU,
-        (false, false) if raw <= 0.0 => raw + TAU,
-        (false, true) if raw >= 0.0 => raw - TAU,
-        _ => raw,
-    };
-    let extra = f64::from(turns) * TAU;
-    sweep += if clockwise { -extra } else { extra };
-    Ok((
-        Arc {
-            center_mm: center,
-            radius_mm: radius,
-            start_angle_rad: sy.atan2(sx),
-            sweep_rad: sweep,
-            z_start_mm: start.z,
-            z_delta_mm: end.z - start.z,
-        },
-        (end_radius - radius).abs(),
-    ))
+
+    /// The letters of the centre offset in this plane.
+    pub fn offset_letters(self) -> [u8; 2] {
+        match self {
+            Plane::Xy => [b'I', b'J'],
+            Plane::Xz => [b'I', b'K'],
+            Plane::Yz => [b'J', b'K'],
+        }
+    }
 }
 
-/// Whether a start/end radius difference is beyond the tolerance.
-pub fn radius_mismatch(radius_mm: f64, mismatch_mm: f64) -> bool {
-    mismatch_mm > RADIUS_ABS_TOL_MM + RADIUS_REL_TOL * radius_mm
+/// How the firmware cuts arcs into chords.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ArcRules {
+    /// Klipper's `[gcode_arcs]`: chords of `resolution` mm (default 1).
+    Klipper { resolution_mm: f64 },
+}
+
+/// An arc cut into more chords than this is refused: no printable arc comes near it (a
+/// full turn of radius 15 m at 0.1 mm), a wrong number in the file can (R1e9).
+pub const MAX_CHORDS: u64 = 1_000_000;
+
+/// Klipper's `[gcode_arcs] resolution` default, mm.
+pub const KLIPPER_ARC_RESOLUTION_MM: f64 = 1.0;
+
+impl Default for ArcRules {
+    fn default() -> Self {
+        ArcRules::Klipper {
+            resolution_mm: KLIPPER_ARC_RESOLUTION_MM,
+        }
+    }
+}
+
+/// The chords of one arc: their end points, in the coordinates `start` and `target` are
+/// given in (the G-code's). The last chord ends exactly at `target`.
+#[derive(Clone, Copy, Debug)]
+pub struct Chords {
+    /// Centre of the circle in the plane's two coordinates.
+    centre: [f64; 2],
+    /// −offset: the start point seen from the centre.
+    radius_vec: [f64; 2],
+    theta_per_chord: f64,
+    helix_start: f64,
+    helix_per_chord: f64,
+    axes: [usize; 3],
+    target: Vec3,
+    count: u64,
+    next: u64,
+}
+
+impl Chords {
+    /// gcode_arcs.py `planArc`: the angular travel from the atan2 of the start and end
+    /// vectors (a full turn when start and end coincide and the angle is 0), counter-
+    /// clockwise positive; max(1, ⌊length / resolution⌋) chords, the length counting the
+    /// helical rise.
+    pub fn klipper(
+        start: Vec3,
+        target: Vec3,
+        offset: [f64; 2],
+        clockwise: bool,
+        plane: Plane,
+        resolution_mm: f64,
+    ) -> Chords {
+        let axes = plane.axes();
+        let [a, b, h] = axes;
+        let (r_p, r_q) = (-offset[0], -offset[1]);
+        let centre = [start[a] - r_p, start[b] - r_q];
+        let (rt_a, rt_b) = (target[a] - centre[0], target[b] - centre[1]);
+        let mut angular = (r_p * rt_b - r_q * rt_a).atan2(r_p * rt_a + r_q * rt_b);
+        if angular < 0.0 {
+            angular += TAU;
+        }
+        if clockwise {
+            angular -= TAU;
+        }
+        if angular == 0.0 && start[a] == target[a] && start[b] == target[b] {
+            angular = TAU;
+        }
+        let linear = target[h] - start[h];
+        let flat = r_p.hypot(r_q) * angular;
+        let travel = if linear != 0.0 {
+            flat.hypot(linear)
+        } else {
+            flat.abs()
+        };
+        let count = (travel / resolution_mm).floor().max(1.0);
+        // Not a finite number of chords, or too many: `chord_count` says so (0 chords).
+        let count = if count.is_finite() && count <= MAX_CHORDS as f64 {
+            count
+        } else {
+            0.0
+        };
+        Chords {
+            centre,
+            radius_vec: [r_p, r_q],
+            theta_per_chord: angular / count,
+            helix_start: start[h],
+            helix_per_chord: linear / count,
+            axes,
+            target,
+            count: count as u64,
+            next: 1,
+        }
+    }
+
+    /// How many chords the arc has: 0 when the numbers of the arc are not finite or it
+    /// would have more than [`MAX_CHORDS`].
+    pub fn chord_count(&self) -> u64 {
+        self.count
+    }
+}
+
+impl Iterator for Chords {
+    type Item = Vec3;
+
+    fn next(&mut self) -> Option<Vec3> {
+        let i = self.next;
+        if i > self.count {
+            return None;
+        }
+        self.next += 1;
+        if i == self.count {
+            return Some(self.target);
+        }
+        let (sin, cos) = (i as f64 * self.theta_per_chord).sin_cos();
+        let [r_p, r_q] = self.radius_vec;
+        let [a, b, h] = self.axes;
+        let mut c = Vec3::zeros();
+        c[a] = self.centre[0] + r_p * cos - r_q * sin;
+        c[b] = self.centre[1] + r_p * sin + r_q * cos;
+        c[h] = self.helix_start + i as f64 * self.helix_per_chord;
+        Some(c)
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::path::Path;
-    use std::f64::consts::{FRAC_PI_2, PI};
 
     fn v(x: f64, y: f64, z: f64) -> Vec3 {
         Vec3::new(x, y, z)
     }
 
     #[test]
-    fn flsun_helix_quarter_turn() {
-        // G1 X-98 Y0 Z0.2, then G3 X0 Y-98 I98 Z0.2: centre (0,0), counter-clockwise
-        // from 180° to 270°: a quarter turn.
-        let (a, mis) = arc(
-            v(-98.0, 0.0, 0.2),
-            v(0.0, -98.0, 0.2),
-            Centre::Offset([98.0, 0.0]),
-            false,
-            0,
-        )
-        .unwrap();
-        assert_eq!(a.center_mm, [0.0, 0.0]);
-        assert_eq!(a.radius_mm, 98.0);
-        assert!((a.sweep_rad - FRAC_PI_2).abs() < 1e-12);
-        assert!(mis < 1e-12);
-        let p = Path::Arc(a);
-        assert!((p.end() - v(0.0, -98.0, 0.2)).norm() < 1e-9);
-        // The midpoint lies at 225°.
-        let m = p.point(0.5);
-        let h = 98.0 / 2f64.sqrt();
-        assert!((m - v(-h, -h, 0.2)).norm() < 1e-9);
-    }
-
-    #[test]
-    fn clockwise_is_negative_and_helical_z() {
-        let (a, _) = arc(
+    fn a_quarter_circle_is_cut_like_klipper() {
+        // r = 10 quarter circle counter-clockwise from (10, 0) around the origin: length
+        // 15.708 mm, 15 chords of 6°; the points lie on the circle, the last is the target.
+        let c = Chords::klipper(
             v(10.0, 0.0, 1.0),
-            v(0.0, 10.0, 3.0),
-            Centre::Offset([-10.0, 0.0]),
-            true,
-            0,
-        )
-        .unwrap();
-        // Clockwise from 0° to 90° is three quarters of a turn.
-        assert!((a.sweep_rad + 1.5 * PI).abs() < 1e-12);
-        assert_eq!((a.z_start_mm, a.z_delta_mm), (1.0, 2.0));
-        let p = Path::Arc(a);
-        // Passing 270° = (0, -10) at u = 1/3, z one third up.
-        assert!((p.point(1.0 / 3.0) - v(0.0, -10.0, 1.0 + 2.0 / 3.0)).norm() < 1e-9);
-    }
-
-    #[test]
-    fn full_circles_and_turns() {
-        let s = v(5.0, 0.0, 0.0);
-        let (a, _) = arc(s, s, Centre::Offset([-5.0, 0.0]), false, 0).unwrap();
-        assert_eq!(a.sweep_rad, TAU);
-        let (a, _) = arc(s, s, Centre::Offset([-5.0, 0.0]), true, 0).unwrap();
-        assert_eq!(a.sweep_rad, -TAU);
-        let (a, _) = arc(s, v(0.0, 5.0, 0.0), Centre::Offset([-5.0, 0.0]), false, 2).unwrap();
-        assert!((a.sweep_rad - (FRAC_PI_2 + 2.0 * TAU)).abs() < 1e-12);
-    }
-
-    #[test]
-    fn radius_form_both_sides() {
-        // From (0,0) to (10,0) with R5: a half circle, centre (5,0).
-        let (a, _) = arc(
-            v(0.0, 0.0, 0.0),
-            v(10.0, 0.0, 0.0),
-            Centre::Radius(5.0),
-            true,
-            0,
-        )
-        .unwrap();
-        assert!((a.center_mm[0] - 5.0).abs() < 1e-12 && a.center_mm[1].abs() < 1e-12);
-        // R = 5√2 from (0,0) to (10,0): the centre is at (5, ±5). Counter-clockwise short
-        // arc: centre on the left of the chord, (5, 5); a quarter turn.
-        let r = 50f64.sqrt();
-        let (a, _) = arc(
-            v(0.0, 0.0, 0.0),
-            v(10.0, 0.0, 0.0),
-            Centre::Radius(r),
+            v(0.0, 10.0, 1.0),
+            [-10.0, 0.0],
             false,
-            0,
-        )
-        .unwrap();
-        assert!((a.center_mm[0] - 5.0).abs() < 1e-12 && (a.center_mm[1] - 5.0).abs() < 1e-12);
-        assert!((a.sweep_rad - FRAC_PI_2).abs() < 1e-12);
-        // Clockwise short arc: centre (5, -5), sweep -90°.
-        let (a, _) = arc(
-            v(0.0, 0.0, 0.0),
-            v(10.0, 0.0, 0.0),
-            Centre::Radius(r),
-            true,
-            0,
-        )
-        .unwrap();
-        assert!((a.center_mm[1] + 5.0).abs() < 1e-12);
-        assert!((a.sweep_rad + FRAC_PI_2).abs() < 1e-12);
-        // Negative R: the long way round, three quarters.
-        let (a, _) = arc(
-            v(0.0, 0.0, 0.0),
-            v(10.0, 0.0, 0.0),
-            Centre::Radius(-r),
-            false,
-            0,
-        )
-        .unwrap();
-        assert!((a.sweep_rad - 1.5 * PI).abs() < 1e-12);
-        assert!(matches!(
-            arc(
-                v(0.0, 0.0, 0.0),
-                v(10.0, 0.0, 0.0),
-                Centre::Radius(4.0),
-                false,
-                0
-            ),
-            Err(ArcError::RadiusTooSmall(_))
-        ));
-    }
-
-    #[test]
-    fn mismatch_is_measured() {
-        let (a, mis) = arc(
-            v(10.0, 0.0, 0.0),
-            v(0.0, 10.5, 0.0),
-            Centre::Offset([-10.0, 0.0]),
-            false,
-            0,
-        )
-        .unwrap();
-        assert!((mis - 0.5).abs() < 1e-12);
-        assert!(radius_mismatch(a.radius_mm, mis));
-        assert!(!radius_mismatch(10.0, 0.015));
-        assert_eq!(
-            arc(
-                v(1.0, 1.0, 0.0),
-                v(2.0, 2.0, 0.0),
-                Centre::Offset([0.0, 0.0]),
-                false,
-                0
-            )
-            .unwrap_err(),
-            ArcError::ZeroRadius
+            Plane::Xy,
+            1.0,
         );
+        assert_eq!(c.chord_count(), 15);
+        let pts: Vec<Vec3> = c.collect();
+        assert_eq!(pts.len(), 15);
+        for (i, p) in pts.iter().enumerate() {
+            let th = (6.0 * (i + 1) as f64).to_radians();
+            assert!(
+                (p - v(10.0 * th.cos(), 10.0 * th.sin(), 1.0)).norm() < 1e-12,
+                "{i}"
+            );
+        }
+        assert_eq!(pts[14], v(0.0, 10.0, 1.0));
+    }
+
+    #[test]
+    fn clockwise_helix_full_turn_and_planes() {
+        // The FLSUN Q5 start G-code, G3 X0 Y-98 I98 Z0.2 from (−98, 0, 5): centre (0, 0),
+        // counter-clockwise from 180° to 270°, a quarter turn descending 4.8 mm.
+        let start = v(-98.0, 0.0, 5.0);
+        let c = Chords::klipper(
+            start,
+            v(0.0, -98.0, 0.2),
+            [98.0, 0.0],
+            false,
+            Plane::Xy,
+            1.0,
+        );
+        let quarter = 98.0 * std::f64::consts::FRAC_PI_2;
+        assert_eq!(c.chord_count(), quarter.hypot(4.8).floor() as u64);
+        let pts: Vec<Vec3> = c.collect();
+        assert!(pts[10].x < -90.0 && pts[10].y < 0.0 && pts[10].z < 5.0);
+        // G2 to the same point: three quarters, clockwise over the top (y > 0).
+        let cw: Vec<Vec3> =
+            Chords::klipper(start, v(0.0, -98.0, 5.0), [98.0, 0.0], true, Plane::Xy, 1.0).collect();
+        assert_eq!(cw.len(), (3.0 * quarter).floor() as usize);
+        assert!(cw[10].x < -90.0 && cw[10].y > 0.0);
+        // Start = target: a full circle of 2π·5 = 31.4 mm, 31 chords.
+        let full = Chords::klipper(
+            v(5.0, 0.0, 0.0),
+            v(5.0, 0.0, 0.0),
+            [-5.0, 0.0],
+            true,
+            Plane::Xy,
+            1.0,
+        );
+        assert_eq!(full.chord_count(), 31);
+        // G18 (XZ): centre from I and K, Y the helical axis.
+        let xz: Vec<Vec3> = Chords::klipper(
+            v(0.0, 0.0, 10.0),
+            v(10.0, 2.0, 0.0),
+            [0.0, -10.0],
+            true,
+            Plane::Xz,
+            1.0,
+        )
+        .collect();
+        let last = xz.len() - 1;
+        for p in &xz[..last] {
+            assert!(((p.x).hypot(p.z) - 10.0).abs() < 1e-9);
+        }
+        assert_eq!(xz[last], v(10.0, 2.0, 0.0));
+        // An arc shorter than the resolution is one chord, straight to the target.
+        let tiny: Vec<Vec3> = Chords::klipper(
+            v(0.0, 0.0, 0.0),
+            v(0.1, 0.1, 0.0),
+            [0.1, 0.0],
+            false,
+            Plane::Xy,
+            1.0,
+        )
+        .collect();
+        assert_eq!(tiny, [v(0.1, 0.1, 0.0)]);
     }
 }

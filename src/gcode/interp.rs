@@ -6,7 +6,7 @@
 //! Positions in events are machine positions in the bed frame: G92 shifts the G-code
 //! coordinates, not the nozzle. Before any G28 the nozzle is at the home position.
 
-use super::arc::{self, ArcError, Centre};
+use super::arc::{ArcRules, Chords, Plane};
 use super::parse::{Command, ParsedLine, param_f64, parse_line};
 use super::reader::BUFFER_BYTES;
 use super::{Diagnostic, Event, LimitChange, Move, Severity};
@@ -42,8 +42,9 @@ impl Default for Retraction {
 pub struct ReadStats {
     pub lines: u64,
     pub bytes: u64,
-    /// `Event::Move`s sent (arcs included).
+    /// `Event::Move`s sent (each chord of an arc is one).
     pub moves: u64,
+    /// G2/G3 commands run.
     pub arcs: u64,
     pub stops: u64,
     pub limit_changes: u64,
@@ -72,7 +73,8 @@ pub struct Interpreter {
     unit_mm: f64,
     feed_mm_min: f64,
     speed_factor: f64,
-    plane_xy: bool,
+    plane: Plane,
+    arc_rules: ArcRules,
     retraction: Retraction,
     retracted: bool,
     stats: ReadStats,
@@ -81,8 +83,9 @@ pub struct Interpreter {
 const AXES: [u8; 3] = [b'X', b'Y', b'Z'];
 
 impl Interpreter {
-    /// A fresh interpreter with the nozzle at `home_mm`, G90, M82, G21, G17.
-    pub fn new(home_mm: Vec3) -> Self {
+    /// A fresh interpreter with the nozzle at `home_mm`, G90, M82, G21, G17, arcs cut by
+    /// `arc_rules`.
+    pub fn new(home_mm: Vec3, arc_rules: ArcRules) -> Self {
         Interpreter {
             home: home_mm,
             pos: home_mm,
@@ -94,7 +97,8 @@ impl Interpreter {
             unit_mm: 1.0,
             feed_mm_min: DEFAULT_FEED_MM_MIN,
             speed_factor: 1.0,
-            plane_xy: true,
+            plane: Plane::Xy,
+            arc_rules,
             retraction: Retraction::default(),
             retracted: false,
             stats: ReadStats::default(),
@@ -237,14 +241,9 @@ impl Interpreter {
                     self.extrude_only(e, r.unretract_speed_mm_s * self.speed_factor, ev);
                 }
             }
-            (b'G', 17) => self.plane_xy = true,
-            (b'G', 18 | 19) => {
-                self.plane_xy = false;
-                d.warn(
-                    column,
-                    "only the XY plane (G17) is supported for arcs".into(),
-                );
-            }
+            (b'G', 17) => self.plane = Plane::Xy,
+            (b'G', 18) => self.plane = Plane::Xz,
+            (b'G', 19) => self.plane = Plane::Yz,
             (b'G', 20) => self.unit_mm = 25.4,
             (b'G', 21) => self.unit_mm = 1.0,
             (b'G', 28) => {
@@ -299,9 +298,6 @@ impl Interpreter {
         ev: &mut Events<impl FnMut(Event)>,
     ) {
         self.stats.moves += 1;
-        if matches!(path, Path::Arc(_)) {
-            self.stats.arcs += 1;
-        }
         (ev.on_event)(Event::Move(Move {
             line: ev.line,
             path,
@@ -383,6 +379,9 @@ impl Interpreter {
         }
     }
 
+    /// G2/G3 as Klipper's gcode_arcs.py runs them: refused in relative mode and in R form,
+    /// the centre offset from the plane's two letters (a zero offset refused), cut into
+    /// chords ([`Chords::klipper`]), each an ordinary move with its share of E and the F.
     fn arc(
         &mut self,
         p: &ParsedLine,
@@ -391,85 +390,71 @@ impl Interpreter {
         ev: &mut Events<impl FnMut(Event)>,
         d: &mut Diags<impl FnMut(Diagnostic)>,
     ) {
-        if !self.plane_xy {
+        let ArcRules::Klipper { resolution_mm } = self.arc_rules;
+        if !self.absolute {
             d.error(
                 column,
-                "arc outside the XY plane (G18/G19) is not supported".into(),
+                "G2/G3 does not support relative move mode (Klipper refuses it)".into(),
             );
             return;
         }
-        let i = p.value(b'I');
-        let j = p.value(b'J');
-        let centre = match (i, j, p.word(b'R')) {
-            (None, None, None) => {
-                d.error(
-                    column,
-                    "G2/G3 needs I/J (centre offset) or R (radius)".into(),
-                );
-                return;
-            }
-            (None, None, Some(r)) => match r.value {
-                Some(r) => Centre::Radius(r * self.unit_mm),
-                None => {
-                    d.error(r.column, "R needs a value".into());
-                    return;
-                }
-            },
-            (i, j, r) => {
-                if let Some(r) = r {
-                    d.warn(r.column, "both I/J and R given; R is ignored".into());
-                }
-                Centre::Offset([
-                    i.unwrap_or(0.0) * self.unit_mm,
-                    j.unwrap_or(0.0) * self.unit_mm,
-                ])
-            }
-        };
-        let turns = match p.word(b'P') {
-            None => 0,
-            Some(w) => match w.value {
-                Some(v) if v >= 0.0 && v.fract() == 0.0 => v as u32,
-                _ => {
-                    d.warn(
-                        w.column,
-                        "P (extra full turns) must be a whole number; ignored".into(),
-                    );
-                    0
-                }
-            },
-        };
+        if let Some(r) = p.word(b'R') {
+            d.error(
+                r.column,
+                "G2/G3 does not support R moves (Klipper refuses the radius form; use I/J)".into(),
+            );
+            return;
+        }
+        let [l0, l1] = self.plane.offset_letters();
+        let offset = [
+            p.value(l0).unwrap_or(0.0) * self.unit_mm,
+            p.value(l1).unwrap_or(0.0) * self.unit_mm,
+        ];
+        if offset == [0.0, 0.0] {
+            d.error(
+                column,
+                format!(
+                    "G2/G3 requires a centre offset {}{} (Klipper refuses the arc)",
+                    char::from(l0),
+                    char::from(l1)
+                ),
+            );
+            return;
+        }
+        if let Some(w) = p.word(b'P') {
+            d.warn(w.column, "P (whole turns) is ignored by Klipper".into());
+        }
         self.feed(p, d);
         let target = self.target(p, d);
-        match arc::arc(self.pos, target, centre, clockwise, turns) {
-            Ok((a, mismatch)) => {
-                if arc::radius_mismatch(a.radius_mm, mismatch) {
-                    d.warn(
-                        column,
-                        format!(
-                            "arc end is {mismatch:.4} mm off the circle of radius {:.4} mm; \
-                             the start radius is used",
-                            a.radius_mm
-                        ),
-                    );
-                }
-                let e = self.extrusion(p, d);
-                let feed = self.feed_mm_s();
-                self.send_move(Path::Arc(a), e, feed, ev);
-                self.pos = target;
-            }
-            Err(err) => d.error(
+        // In the G-code's coordinates, as gcode_arcs.py computes (G92 shifts them).
+        let chords = Chords::klipper(
+            self.pos - self.offset,
+            target - self.offset,
+            offset,
+            clockwise,
+            self.plane,
+            resolution_mm,
+        );
+        if chords.chord_count() == 0 {
+            d.error(
                 column,
-                match err {
-                    ArcError::ZeroRadius => "arc centre equals its start point (I0 J0)".into(),
-                    ArcError::RadiusTooSmall(by) => {
-                        format!("arc radius too small to reach the end point (short by {by:.4} mm)")
-                    }
-                    ArcError::RadiusFullCircle => {
-                        "R-form arc ending at its start: the centre is undefined".into()
-                    }
-                },
-            ),
+                format!(
+                    "arc too long or not finite: more than {} chords of {resolution_mm} mm",
+                    super::arc::MAX_CHORDS
+                ),
+            );
+            return;
         }
+        let e_total = self.extrusion(p, d);
+        self.stats.arcs += 1;
+        let e_per_chord = e_total / chords.chord_count() as f64;
+        let feed = self.feed_mm_s();
+        for c in chords {
+            let to = c + self.offset;
+            self.send_move(Path::line(self.pos, to), e_per_chord, feed, ev);
+            self.pos = to;
+        }
+        self.pos = target;
     }
 
     /// G92: the current position gets the given G-code coordinates; without any axis,

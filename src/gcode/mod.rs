@@ -1,7 +1,7 @@
 //! Reading G-code: a streaming line reader, a per-line nom parser, and the modal
 //! interpreter that turns lines into [`Event`]s for the planner.
 
-mod arc;
+pub mod arc;
 mod event;
 mod interp;
 pub mod parse;
@@ -9,6 +9,7 @@ pub mod reader;
 
 use std::io::Read;
 
+pub use arc::{ArcRules, Plane};
 pub use event::{Diagnostic, Event, LimitChange, Move, Severity};
 pub use interp::{DEFAULT_FEED_MM_MIN, Interpreter, ReadStats, Retraction};
 pub use parse::{Command, ParsedLine, Word, parse_line};
@@ -17,16 +18,18 @@ pub use reader::{ChunkReader, Line, LineReader};
 use crate::path::Vec3;
 
 /// Reads G-code from `input` line by line and interprets it, nozzle starting at
-/// `home_mm` (the position after G28: `(0, 0, home_z)`). Events and diagnostics go to the
-/// callbacks in line order; the counts come back at the end. Only I/O fails.
+/// `home_mm` (the position after G28: `(0, 0, home_z)`), arcs cut by `arc_rules`. Events
+/// and diagnostics go to the callbacks in line order; the counts come back at the end.
+/// Only I/O fails.
 pub fn interpret<R: Read>(
     input: R,
     home_mm: Vec3,
+    arc_rules: ArcRules,
     mut on_event: impl FnMut(Event),
     mut on_diag: impl FnMut(Diagnostic),
 ) -> std::io::Result<ReadStats> {
     let mut reader = LineReader::new(input);
-    let mut interp = Interpreter::new(home_mm);
+    let mut interp = Interpreter::new(home_mm, arc_rules);
     while let Some(line) = reader.next_line()? {
         interp.line(
             line.number,

@@ -16,6 +16,9 @@ pub(crate) mod test_support;
 mod tests;
 mod validate;
 
+use crate::gcode::ArcRules;
+use crate::motion::drive::Drive;
+use crate::motion::shaper::InputShaper;
 use std::path::Path;
 
 use crate::delta::{self, DeltaModel};
@@ -101,6 +104,12 @@ pub struct Machine {
     pub motors: Motors,
     pub sampling: Sampling,
     pub gravity_m_s2: f64,
+    /// How G2/G3 are cut into chords (Klipper's `[gcode_arcs]`).
+    pub arc_rules: ArcRules,
+    /// Klipper's `[input_shaper]`.
+    pub input_shaper: InputShaper,
+    /// How the nozzle follows the commanded motion.
+    pub drive: Drive,
 }
 
 /// Why a machine profile cannot be used. The message names the file, the line and column

@@ -3,6 +3,9 @@
 //! geometry form and hands the motors to [`motor::resolve`]. Unknown keys are errors. The
 //! struct names show in the parser's messages ("expected struct RawMasses").
 
+use crate::gcode::ArcRules;
+use crate::motion::drive::Drive;
+use crate::motion::shaper::InputShaper;
 use serde::Deserialize;
 
 use super::{Extruder, Geometry, Invalid, Limits, Machine, Masses, Sampling, defaults, motor};
@@ -246,6 +249,9 @@ impl RawMachine {
                 period_s: self.sampling.period_s,
             },
             gravity_m_s2: self.gravity_m_s2,
+            arc_rules: ArcRules::default(),
+            input_shaper: InputShaper::default(),
+            drive: Drive::Rigid,
         })
     }
 }

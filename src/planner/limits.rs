@@ -1,12 +1,11 @@
 //! The speed and acceleration limits of one move, as Klipper sets them before the lookahead:
 //! the toolhead's `Move.__init__` (klippy/toolhead.py), the delta kinematics' `check_move`
-//! (klippy/kinematics/delta.py), the extruder's `check_move` (klippy/kinematics/extruder.py),
-//! and, ours alone, the centripetal cap of a native arc.
+//! (klippy/kinematics/delta.py) and the extruder's `check_move`
+//! (klippy/kinematics/extruder.py).
 
 use crate::gcode::{LimitChange, Move};
 use crate::machine::Machine;
 use crate::machine::defaults::SLOW_RATIO;
-use crate::path::Path;
 
 use super::queue::QueuedMove;
 
@@ -116,7 +115,7 @@ impl MoveLimits {
             f64::INFINITY
         };
         let path_d = m.path.length_mm();
-        if !path_d.is_finite() || !m.e_mm.is_finite() || !valid_path(&m.path) {
+        if !path_d.is_finite() || !m.e_mm.is_finite() || !m.path.is_finite() {
             return None;
         }
         let kinematic = path_d >= MIN_KINEMATIC_D_MM;
@@ -145,16 +144,14 @@ impl MoveLimits {
         if m.e_mm != 0.0 {
             self.limit_extruder(m, &mut q);
         }
-        if kinematic {
-            // Native arc: v²/r ≤ accel along the whole arc (r = ∞ for a line).
-            let cap_v2 = q.accel_mm_s2 * m.path.min_radius_mm();
-            q.max_cruise_v2 = q.max_cruise_v2.min(cap_v2);
-        }
         // Limits divided by an extrusion ratio far beyond any G-code's (|E| ~ 1e300) leave a
-        // speed whose square underflows: nothing can be planned, not even in finite time.
+        // speed whose square, or an acceleration that, underflows: nothing can be planned,
+        // not even in finite time.
+        let v = q.max_cruise_v2.sqrt();
         let plannable = q.max_cruise_v2 > 0.0
             && q.accel_mm_s2 > 0.0
-            && (q.move_d_mm / q.max_cruise_v2.sqrt()).is_finite();
+            && (q.move_d_mm / v).is_finite()
+            && (v / q.accel_mm_s2).is_finite();
         plannable.then_some(q)
     }
 
@@ -185,11 +182,7 @@ impl MoveLimits {
     /// extruder.py `check_move`: a move with no XY motion, or a retract, is capped at the
     /// extrude-only limits divided by its |E|/length ratio.
     fn limit_extruder(&self, m: &Move, q: &mut QueuedMove) {
-        let no_xy = !q.kinematic
-            || match m.path {
-                Path::Line { start, end } => start.x == end.x && start.y == end.y,
-                Path::Arc(a) => a.sweep_rad == 0.0 || a.radius_mm == 0.0,
-            };
+        let no_xy = !q.kinematic || !m.path.moves_xy();
         if no_xy || q.e_ratio < 0.0 {
             let inv = 1.0 / q.e_ratio.abs();
             q.limit_speed(self.max_e_velocity_mm_s * inv, self.max_e_accel_mm_s2 * inv);
@@ -197,32 +190,10 @@ impl MoveLimits {
     }
 }
 
-/// Whether every number of a path is finite and an arc's radius positive (the contract of
-/// `path::Arc`). The length alone can be finite when the path is not: an arc of a tiny
-/// sweep around an infinite centre.
-fn valid_path(p: &Path) -> bool {
-    match p {
-        Path::Line { start, end } => start.iter().chain(end.iter()).all(|v| v.is_finite()),
-        Path::Arc(a) => {
-            [
-                a.center_mm[0],
-                a.center_mm[1],
-                a.radius_mm,
-                a.start_angle_rad,
-                a.sweep_rad,
-                a.z_start_mm,
-                a.z_delta_mm,
-            ]
-            .iter()
-            .all(|v| v.is_finite())
-                && a.radius_mm > 0.0
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::path::Path;
     use crate::planner::tests::machine;
 
     #[test]
@@ -235,33 +206,17 @@ mod tests {
     }
 
     #[test]
-    fn a_path_with_a_non_finite_number_or_no_radius_is_dropped() {
+    fn a_path_with_a_non_finite_number_is_dropped() {
         let limits = MoveLimits::new(&machine());
-        let arc = crate::path::Arc {
-            center_mm: [f64::NEG_INFINITY, f64::NAN],
-            radius_mm: 180.0,
-            start_angle_rad: 0.0,
-            sweep_rad: 1e-300,
-            z_start_mm: 0.0,
-            z_delta_mm: 0.0,
-        };
         let mv = |path| Move {
             line: 1,
             path,
             e_mm: 1.0,
             feed_mm_s: 10.0,
         };
-        // The arc's length is finite (180 · 1e-300) though its centre is not.
-        assert!(Path::Arc(arc).length_mm().is_finite());
-        assert!(limits.queued_move(&mv(Path::Arc(arc))).is_none());
-        let flat = crate::path::Arc {
-            center_mm: [0.0, 0.0],
-            radius_mm: -0.0,
-            z_delta_mm: 100.0,
-            ..arc
-        };
-        assert!(limits.queued_move(&mv(Path::Arc(flat))).is_none());
         let p = crate::path::Vec3::new(0.0, 0.0, 10.0);
+        let far = crate::path::Vec3::new(f64::INFINITY, 0.0, 10.0);
+        assert!(limits.queued_move(&mv(Path::line(p, far))).is_none());
         assert!(limits.queued_move(&mv(Path::line(p, p))).is_some());
         // A retract of 1e300 mm over 10 mm: the extruder cap's speed² underflows to 0.
         let q = crate::path::Vec3::new(0.0, 10.0, 10.0);

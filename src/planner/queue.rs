@@ -84,8 +84,8 @@ impl QueuedMove {
         self.mcr_delta_v2 = self.mcr_delta_v2.min(self.delta_v2);
     }
 
-    /// toolhead.py `Move.calc_junction`, with the arc's end tangents in place of the chord
-    /// direction. `icv` is the extruder's instantaneous_corner_velocity.
+    /// toolhead.py `Move.calc_junction`. `icv` is the extruder's
+    /// instantaneous_corner_velocity.
     fn calc_junction(&mut self, prev: &QueuedMove, icv_mm_s: f64) {
         self.junction_cap_v2 = if self.kinematic && prev.kinematic {
             self.geometric_cap_v2(prev, icv_mm_s)
@@ -108,7 +108,7 @@ impl QueuedMove {
         // The "approximated centripetal velocity" of a virtual arc of deviation
         // junction_deviation tangent to both moves; θ is the angle between the reversed
         // incoming direction and the outgoing one (π for a straight continuation).
-        let cos_theta = -prev.path.end_dir().dot(&self.path.start_dir());
+        let cos_theta = -prev.path.dir().dot(&self.path.dir());
         let sin_half = (0.5 * (1.0 - cos_theta)).max(0.0).sqrt();
         let cos_half = (0.5 * (1.0 + cos_theta)).max(0.0).sqrt();
         let one_minus_sin_half = 1.0 - sin_half;

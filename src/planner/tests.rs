@@ -5,8 +5,8 @@
 use super::*;
 use crate::gcode::{LimitChange, Move};
 use crate::machine::{Extruder, Geometry, Limits, Masses, Motors, Sampling};
-use crate::path::{Arc, Vec3};
-use std::f64::consts::{PI, TAU};
+use crate::path::Vec3;
+use std::f64::consts::PI;
 
 /// A Kossel-like machine: R = 105, l = 215, 300 mm/s, 3000 mm/s², scv 5, mcr 0.5,
 /// extrude-only 50 mm/s and 500 mm/s², instantaneous_corner_velocity 1.
@@ -48,6 +48,9 @@ pub(super) fn machine() -> Machine {
         },
         sampling: Sampling { period_s: 0.001 },
         gravity_m_s2: 9.81,
+        arc_rules: crate::gcode::ArcRules::default(),
+        input_shaper: crate::motion::shaper::InputShaper::default(),
+        drive: crate::motion::drive::Drive::Rigid,
     }
 }
 
@@ -401,53 +404,50 @@ fn dwell_adds_time_and_stops() {
     close(t, 0.966_666_667, "print time");
 }
 
-fn circle(center: [f64; 2], radius: f64, start: f64, sweep: f64) -> Path {
-    Path::Arc(Arc {
-        center_mm: center,
-        radius_mm: radius,
-        start_angle_rad: start,
-        sweep_rad: sweep,
-        z_start_mm: 0.0,
-        z_delta_mm: 0.0,
-    })
-}
-
 #[test]
-fn arc_is_one_move_capped_by_centripetal_accel() {
-    // Full circle r = 10 at F 300: v² ≤ a·r = 30000, v = 173.205081. (mcr peak
-    // 2π·10·1500 = 94248 does not bind.) 0.057735 s and 5 mm each end, cruise
-    // (62.831853 − 10)/173.205081 = 0.305025 s: 0.420495 s.
-    let (m, t) = plan(&[mv(1, circle([0.0, 0.0], 10.0, 0.0, TAU), 0.0, 300.0)]);
-    assert_eq!(m.len(), 1);
-    close(m[0].distance_mm, 62.831_853_07, "length");
-    close(m[0].cruise_v_mm_s, 173.205_080_8, "cruise");
-    close(t, 0.420_494_6, "print time");
-}
-
-#[test]
-fn junction_into_an_arc_uses_its_tangent() {
-    // The full circle from (10, 0) starts tangent to +y; its chord is zero.
-    // From a line along +x: a 90° corner, 5 mm/s.
-    let arc = circle([0.0, 0.0], 10.0, 0.0, TAU);
-    let (m, _) = plan(&[
-        mv(1, line([0.0, 0.0, 0.0], [10.0, 0.0, 0.0]), 0.0, 300.0),
-        mv(2, arc, 0.0, 300.0),
-    ]);
-    close(m[0].end_v_mm_s, 5.0, "corner into arc");
-    // From a line along +y: straight on, at the arc's cap √30000 = 173.205 (the 20 mm line
-    // reaches it: 2·20·3000 = 120000 ≥ 30000).
-    let (m, _) = plan(&[
-        mv(1, line([10.0, -20.0, 0.0], [10.0, 0.0, 0.0]), 0.0, 300.0),
-        mv(2, arc, 0.0, 300.0),
-    ]);
-    close(m[0].end_v_mm_s, 173.205_080_8, "tangent into arc");
-    // Out of a half circle (ends at (−10, 0) heading −y) into a line along −y: straight.
-    let (m, _) = plan(&[
-        mv(1, circle([0.0, 0.0], 10.0, 0.0, PI), 0.0, 300.0),
-        mv(2, line([-10.0, 0.0, 0.0], [-10.0, -40.0, 0.0]), 0.0, 300.0),
-    ]);
-    close(m[0].end_v_mm_s, m[0].cruise_v_mm_s, "tangent out of arc");
-    assert!(m[0].end_v_mm_s > 100.0);
+fn an_arc_runs_as_chords_with_junctions_at_square_corner_velocity_limits() {
+    // A full circle r = 5 at F 6000 cut into 31 chords of 2·5·sin(π/31) = 1.01246 mm
+    // (Klipper's gcode_arcs): each junction turns by 2π/31, so the angle θ between the
+    // reversed incoming and the outgoing direction is π − 2π/31 and sin(θ/2) = cos(π/31)
+    // = 0.994869. Junction deviation scv²(√2 − 1)/a = 0.0034518 mm:
+    // v² = sin(θ/2)/(1 − sin(θ/2))·jd·a = 193.89·0.0034518·3000 = 2007.9, v = 44.81 mm/s.
+    // The chords' own cap ¼·tan(θ/2)·2·d·a = 0.25·9.834·6074.8 = 14935 (122 mm/s) does
+    // not bind. Each chord accelerates from 44.81 mm/s over 1.0125 mm at most to
+    // √(44.81² + 3000·1.0125) = 72.6 mm/s (mcr: half of that distance, 59.7 mm/s): the
+    // sawtooth Klipper runs, never 100 mm/s.
+    let start = Vec3::new(5.0, 0.0, 0.0);
+    let chords = crate::gcode::arc::Chords::klipper(
+        start,
+        start,
+        [-5.0, 0.0],
+        false,
+        crate::gcode::Plane::Xy,
+        1.0,
+    );
+    let mut from = start;
+    let moves: Vec<Event> = chords
+        .map(|to| {
+            let e = mv(1, Path::line(from, to), 0.0, 100.0);
+            from = to;
+            e
+        })
+        .collect();
+    let (m, _) = plan(&moves);
+    assert_eq!(m.len(), 31);
+    close(m[0].distance_mm, 10.0 * (PI / 31.0).sin(), "chord");
+    let jd = 25.0 * (std::f64::consts::SQRT_2 - 1.0) / 3000.0;
+    let sin_half = (PI / 31.0).cos();
+    let v_junction = (sin_half / (1.0 - sin_half) * jd * 3000.0).sqrt();
+    assert!(
+        (v_junction - 44.81).abs() < 0.005,
+        "hand value {v_junction}"
+    );
+    for w in m[1..].windows(2) {
+        close(w[0].end_v_mm_s, v_junction, "junction");
+        let peak = (v_junction * v_junction + 3000.0 * w[0].distance_mm).sqrt();
+        assert!(w[0].cruise_v_mm_s <= peak + 1e-9, "{}", w[0].cruise_v_mm_s);
+        assert!(w[0].cruise_v_mm_s < 60.0, "{}", w[0].cruise_v_mm_s);
+    }
 }
 
 /// A deterministic, varied sequence (xorshift from `seed`, which must not be 0): lines of
@@ -483,23 +483,33 @@ fn random_events(n: usize, mut seed: u64) -> Vec<Event> {
         }
         let dir = Vec3::new(heading.cos(), heading.sin(), 0.0);
         if r < 0.15 {
+            // An arc, as the chords Klipper cuts it into.
             let radius = 1.0 + 10.0 * rnd();
             let sweep = (if rnd() < 0.5 { 1.0 } else { -1.0 }) * (0.2 + 3.0 * rnd());
             let side = if sweep > 0.0 { 1.0 } else { -1.0 };
             let normal = Vec3::new(-dir.y, dir.x, 0.0) * side;
             let c = pos + normal * radius;
-            let start = (pos.y - c.y).atan2(pos.x - c.x);
-            let path = Path::Arc(Arc {
-                center_mm: [c.x, c.y],
-                radius_mm: radius,
-                start_angle_rad: start,
-                sweep_rad: sweep,
-                z_start_mm: pos.z,
-                z_delta_mm: 0.0,
-            });
-            events.push(mv(line_no, path, path.length_mm() * 0.04, feed));
-            pos = path.end();
-            heading = path.end_dir().y.atan2(path.end_dir().x);
+            let start = (pos.y - c.y).atan2(pos.x - c.x) + sweep;
+            let target = Vec3::new(
+                c.x + radius * start.cos(),
+                c.y + radius * start.sin(),
+                pos.z,
+            );
+            let offset = [c.x - pos.x, c.y - pos.y];
+            let chords = crate::gcode::arc::Chords::klipper(
+                pos,
+                target,
+                offset,
+                sweep < 0.0,
+                crate::gcode::Plane::Xy,
+                1.0,
+            );
+            for to in chords {
+                let path = Path::line(pos, to);
+                events.push(mv(line_no, path, path.length_mm() * 0.04, feed));
+                heading = path.dir().y.atan2(path.dir().x);
+                pos = to;
+            }
             continue;
         }
         let len = if rnd() < 0.5 {

@@ -20,7 +20,7 @@ use crate::resample::Phase;
 /// At most this many violations and diagnostics are kept in detail; all are counted.
 pub const MAX_LISTED: usize = 10_000;
 
-/// The outcome of checking one file: the JSON report of DESIGN.md.
+/// The outcome of checking one file: the JSON report (docs/report.md).
 #[derive(Clone, Debug, Serialize)]
 pub struct Report {
     pub file: String,

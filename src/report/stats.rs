@@ -143,6 +143,28 @@ impl MoveStats {
         self.max_energy_residual_w = self.max_energy_residual_w.max(residual);
     }
 
+    /// Takes in the statistics of another part of the same move (a later one): the peaks
+    /// (an earlier peak wins a tie), the most severe problem, the fastest carriage ratio.
+    pub fn merge(&mut self, later: &MoveStats) {
+        self.samples += later.samples;
+        for i in 0..3 {
+            if later.peak_force_n[i] > self.peak_force_n[i] {
+                self.peak_force_n[i] = later.peak_force_n[i];
+                self.peak_t_s[i] = later.peak_t_s[i];
+                self.peak_phase[i] = later.peak_phase[i];
+            }
+        }
+        self.max_energy_residual_w = self.max_energy_residual_w.max(later.max_energy_residual_w);
+        if let Some(p) = &later.problem {
+            self.flag(p.clone());
+        }
+        if let Some((tower, ratio)) = later.near_singular
+            && self.near_singular.is_none_or(|(_, r)| ratio > r)
+        {
+            self.near_singular = Some((tower, ratio));
+        }
+    }
+
     /// Records a problem. A move keeps its most severe one (unreachable, then above home,
     /// then outside the radius), the first of that kind: a move that leaves the print disc
     /// and then the arms' reach is reported unreachable.

@@ -1,0 +1,277 @@
+//! The sequential part of the pipeline after the planner: planned moves → planned pieces →
+//! commanded pieces (the input shaper) → actual pieces (the drive's lag at each start) →
+//! the work of sampling them, grouped by G-code line with the checks of the line's planned
+//! moves. All of it is cheap per piece; the sampling itself runs in parallel afterwards.
+
+use std::collections::VecDeque;
+
+use crate::machine::Machine;
+use crate::motion::drive::{ActualPiece, Drive, DriveStage, Response};
+use crate::motion::planned::PlannedPieces;
+use crate::motion::shaper::Shaper;
+use crate::motion::{CONTINUITY_MM, Segment};
+use crate::path::Vec3;
+use crate::planner::PlannedMove;
+use crate::report::MoveStats;
+use crate::resample::{JUMP_MIN_MM_S, Kicks, PieceWork};
+
+use super::move_check::MoveChecker;
+
+/// The actual motion's pieces of one G-code line (in a batch's piece list), with what the
+/// checks of its planned moves found.
+#[derive(Clone, Debug)]
+pub struct MoveWork {
+    /// Counts the lines' groups: the parts of one group split between batches share it.
+    pub group: u64,
+    pub stats: MoveStats,
+    /// Where the line's last planned move ends on the bed, mm.
+    pub end_xy_mm: [f64; 2],
+    /// Its pieces: `pieces[first..first + count]` of the batch.
+    pub first: usize,
+    pub count: usize,
+}
+
+/// Work for the parallel stage: pieces and the lines they belong to, in time order.
+#[derive(Clone, Debug, Default)]
+pub struct Batch {
+    pub pieces: Vec<PieceWork>,
+    pub moves: Vec<MoveWork>,
+}
+
+/// The drive keeps ringing after the motion ends: its last piece is followed by a rest of
+/// this many drive periods.
+const SETTLE_PERIODS: f64 = 2.0;
+
+/// Planned moves in; batches of piece work out.
+pub struct Sequencer<'c> {
+    checker: &'c MoveChecker<'c>,
+    period_s: f64,
+    response: Option<Response>,
+    planned: PlannedPieces,
+    shaper: Shaper,
+    drive: DriveStage,
+    /// The last actual piece, held back until the next one tells its end (rigid impulses,
+    /// the end sample), with the duration of the one before it.
+    held: Option<(ActualPiece, f64)>,
+    corner_until_s: f64,
+    /// Lines whose planned moves were checked but whose pieces have not come yet.
+    checked: VecDeque<(MoveStats, [f64; 2])>,
+    batch: Batch,
+    group: u64,
+    /// The commanded motion's first start and last end, s.
+    span_s: Option<(f64, f64)>,
+}
+
+impl<'c> Sequencer<'c> {
+    pub fn new(machine: &Machine, checker: &'c MoveChecker<'c>) -> Self {
+        Sequencer {
+            checker,
+            period_s: machine.sampling.period_s,
+            response: match &machine.drive {
+                Drive::Rigid => None,
+                Drive::Spring(s) => Some(Response::new(s)),
+            },
+            planned: PlannedPieces::new(),
+            shaper: Shaper::new(&machine.input_shaper),
+            drive: DriveStage::new(&machine.drive),
+            held: None,
+            corner_until_s: f64::NEG_INFINITY,
+            checked: VecDeque::new(),
+            batch: Batch::default(),
+            group: 0,
+            span_s: None,
+        }
+    }
+
+    /// Takes the next planned move.
+    pub fn push(&mut self, mv: &PlannedMove) {
+        let mut stats = MoveStats::new(mv.line);
+        self.checker.check_geometry(mv, &mut stats);
+        let end = mv.path.end();
+        self.checked.push_back((stats, [end.x, end.y]));
+        let mut commanded = Vec::new();
+        self.planned.push(mv, &mut |seg| {
+            self.shaper.push(seg, &mut |c| commanded.push(c));
+        });
+        for c in commanded {
+            self.commanded(c);
+        }
+    }
+
+    /// The end of the motion: what the shaper still holds, the drive's settling, the last
+    /// piece.
+    pub fn finish(&mut self) {
+        let mut commanded = Vec::new();
+        self.shaper.finish(&mut |c| commanded.push(c));
+        for c in commanded {
+            self.commanded(c);
+        }
+        if let (Some(r), Some((last, _))) = (&self.response, &self.held) {
+            let seg = last.commanded;
+            let (p, _) = seg.end();
+            let settle = Segment::rest(seg.t1_s(), SETTLE_PERIODS * r.period_s(), p, seg.line);
+            let piece = self.drive.push(&settle);
+            self.actual(piece);
+        }
+        if let Some((last, prev_dt)) = self.held.take() {
+            self.emit(last, prev_dt, Vec3::zeros(), 0.0, false);
+        }
+        self.merge_checked_into_open();
+        while let Some((stats, xy)) = self.checked.pop_front() {
+            self.open_group(stats, xy);
+        }
+    }
+
+    /// The commanded motion's duration so far (its first start to its last end), s.
+    pub fn commanded_span_s(&self) -> f64 {
+        self.span_s.map_or(0.0, |(a, b)| b - a)
+    }
+
+    /// Hands out the batch built so far, less its last line if more of it may come.
+    pub fn take_batch(&mut self, complete: bool) -> Batch {
+        if complete || self.batch.moves.len() < 2 {
+            return std::mem::take(&mut self.batch);
+        }
+        let open = self.batch.moves.pop();
+        let mut batch = std::mem::take(&mut self.batch);
+        if let Some(mut open) = open {
+            let first = open.first;
+            self.batch.pieces = batch.pieces.split_off(first);
+            open.first = 0;
+            self.batch.moves.push(open);
+        }
+        batch
+    }
+
+    /// Pieces waiting in the batch.
+    pub fn pending_pieces(&self) -> usize {
+        self.batch.pieces.len()
+    }
+
+    fn commanded(&mut self, c: Segment) {
+        self.span_s = Some(match self.span_s {
+            None => (c.t0_s, c.t1_s()),
+            Some((a, _)) => (a, c.t1_s()),
+        });
+        let piece = self.drive.push(&c);
+        self.actual(piece);
+    }
+
+    /// The next actual piece: the held one can now be sampled.
+    fn actual(&mut self, piece: ActualPiece) {
+        let dt = piece.commanded.dt_s;
+        if let Some((held, prev_dt)) = self.held.take() {
+            let rehomed = (held.commanded.end().0 - piece.commanded.p).norm() > CONTINUITY_MM;
+            let (jump, next_dt) = if rehomed {
+                (Vec3::zeros(), 0.0)
+            } else {
+                (piece.jump, dt)
+            };
+            let accel_step = held.commanded.a != piece.commanded.a;
+            let held_dt = held.commanded.dt_s;
+            self.emit(held, prev_dt, jump, next_dt, accel_step && !rehomed);
+            self.held = Some((piece, held_dt));
+        } else {
+            self.held = Some((piece, 0.0));
+        }
+    }
+
+    /// Adds the sampling work of `piece`, whose successor starts with `jump_out` and lasts
+    /// `next_dt`.
+    fn emit(
+        &mut self,
+        piece: ActualPiece,
+        prev_dt: f64,
+        jump_out: Vec3,
+        next_dt: f64,
+        accel_step: bool,
+    ) {
+        let seg = piece.commanded;
+        let jumps = |j: Vec3| j.norm() > JUMP_MIN_MM_S;
+        let (kicks, end_sample) = match self.response {
+            Some(_) => (Kicks::default(), jumps(jump_out)),
+            None => (
+                Kicks::around(
+                    seg.t0_s,
+                    seg.dt_s,
+                    piece.jump,
+                    prev_dt,
+                    jump_out,
+                    next_dt,
+                    self.period_s,
+                ),
+                jumps(jump_out) || accel_step,
+            ),
+        };
+        if jumps(piece.jump) {
+            self.corner_until_s = match &self.response {
+                Some(r) => seg.t0_s + 0.5 * r.period_s(),
+                None => f64::NEG_INFINITY,
+            };
+        }
+        let work = PieceWork {
+            piece,
+            kicks,
+            end_sample,
+            corner_until_s: self.corner_until_s,
+        };
+        let line = seg.line;
+        self.merge_checked_into_open();
+        let starts_group = self.batch.moves.last().is_none_or(|m| m.stats.line != line);
+        if starts_group {
+            self.open_line(line);
+        }
+        self.batch.pieces.push(work);
+        if let Some(m) = self.batch.moves.last_mut() {
+            m.count += 1;
+        }
+    }
+
+    /// The checks of further planned moves of the open group's line (an arc's chords after
+    /// its first) go into it.
+    fn merge_checked_into_open(&mut self) {
+        let Some(open) = self.batch.moves.last_mut() else {
+            return;
+        };
+        while self
+            .checked
+            .front()
+            .is_some_and(|(s, _)| s.line == open.stats.line)
+        {
+            if let Some((s, end)) = self.checked.pop_front() {
+                open.stats.merge(&s);
+                open.end_xy_mm = end;
+            }
+        }
+    }
+
+    /// Starts the group of `line`, after the groups of the lines checked before it that
+    /// have no piece; the checks of its own planned moves merged into it.
+    fn open_line(&mut self, line: u64) {
+        while self.checked.front().is_some_and(|(s, _)| s.line < line) {
+            if let Some((stats, xy)) = self.checked.pop_front() {
+                self.open_group(stats, xy);
+            }
+        }
+        let mut stats = MoveStats::new(line);
+        let mut xy = self.batch.moves.last().map_or([0.0; 2], |m| m.end_xy_mm);
+        while self.checked.front().is_some_and(|(s, _)| s.line == line) {
+            if let Some((s, end)) = self.checked.pop_front() {
+                stats.merge(&s);
+                xy = end;
+            }
+        }
+        self.open_group(stats, xy);
+    }
+
+    fn open_group(&mut self, stats: MoveStats, end_xy_mm: [f64; 2]) {
+        self.group += 1;
+        self.batch.moves.push(MoveWork {
+            group: self.group,
+            stats,
+            end_xy_mm,
+            first: self.batch.pieces.len(),
+            count: 0,
+        });
+    }
+}

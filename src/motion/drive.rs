@@ -1,0 +1,285 @@
+//! The drive's response: the actual motion of the nozzle, each Cartesian axis following
+//! the commanded one through a spring and a damper,
+//!
+//! ẍ = ω²(x_c − x) + 2ζω(ẋ_c − ẋ),
+//!
+//! ω = 2π·`drive.frequency_hz`, ζ = `drive.damping_ratio`. With the lag e = x − x_c, over a
+//! commanded piece of constant acceleration a_c this is ë + 2ζω ė + ω² e = −a_c: the lag
+//! settles towards −a_c/ω² as a damped oscillation, in closed form. At a junction the
+//! commanded velocity jumps and the actual does not: ė jumps by minus the commanded jump,
+//! and the actual acceleration −ω²e − 2ζω ė by 2ζω times the jump: a finite force where the
+//! rigid model has an impulse.
+
+use super::{CONTINUITY_MM, Segment};
+use crate::path::Vec3;
+
+/// How the nozzle follows the commanded motion.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Drive {
+    /// The paper's rigid model: actual = commanded.
+    Rigid,
+    /// A spring and damper per axis.
+    Spring(Spring),
+}
+
+/// The drive's natural frequency and damping ratio (0 ≤ ζ < 1: an underdamped drive, as
+/// belts and steppers are).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Spring {
+    pub frequency_hz: f64,
+    pub damping_ratio: f64,
+}
+
+/// The actual motion's lag behind the commanded one, per axis: e = x − x_c (mm) and
+/// ė (mm/s).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Lag {
+    pub e: Vec3,
+    pub de: Vec3,
+}
+
+/// The spring's constants: ω, σ = ζω, ω_d = ω√(1 − ζ²).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Response {
+    omega: f64,
+    omega2: f64,
+    sigma: f64,
+    omega_d: f64,
+}
+
+impl Response {
+    pub fn new(s: &Spring) -> Response {
+        let omega = std::f64::consts::TAU * s.frequency_hz;
+        let zeta = s.damping_ratio;
+        Response {
+            omega,
+            omega2: omega * omega,
+            sigma: zeta * omega,
+            omega_d: omega * (1.0 - zeta * zeta).sqrt(),
+        }
+    }
+
+    /// The natural period 2π/ω, s.
+    pub fn period_s(&self) -> f64 {
+        std::f64::consts::TAU / self.omega
+    }
+
+    /// The lag `tau_s` into a commanded piece of acceleration `a_c` (mm/s²), from `start`
+    /// at its beginning.
+    #[inline(always)]
+    pub fn lag_at(&self, start: &Lag, a_c: Vec3, tau_s: f64) -> Lag {
+        let (s, c) = (self.omega_d * tau_s).sin_cos();
+        let decay = (-self.sigma * tau_s).exp();
+        // u = e − e_p with e_p = −a_c/ω², the lag the constant acceleration settles to.
+        let e_p = a_c * (-1.0 / self.omega2);
+        let u0 = start.e - e_p;
+        let du0 = start.de;
+        let inv_wd = 1.0 / self.omega_d;
+        let u = (u0 * c + (du0 + u0 * self.sigma) * (s * inv_wd)) * decay;
+        let du = (du0 * c - (du0 * self.sigma + u0 * self.omega2) * (s * inv_wd)) * decay;
+        Lag { e: e_p + u, de: du }
+    }
+
+    /// The actual acceleration of a lag: ẍ = −ω²e − 2ζω ė (mm/s²).
+    #[inline(always)]
+    pub fn acceleration(&self, lag: &Lag) -> Vec3 {
+        lag.e * (-self.omega2) - lag.de * (2.0 * self.sigma)
+    }
+}
+
+/// A commanded piece with the drive's lag at its start: the actual motion over the piece.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ActualPiece {
+    pub commanded: Segment,
+    /// The lag at the start, after the junction's velocity jump.
+    pub lag: Lag,
+    /// The commanded velocity jump at the start (the junction), mm/s.
+    pub jump: Vec3,
+}
+
+/// The drive as a stream: commanded pieces in, in time order; each with the lag at its
+/// start out. Cheap (one closed-form step per piece), so it runs sequentially ahead of the
+/// sampling.
+#[derive(Clone, Debug)]
+pub struct DriveStage {
+    response: Option<Response>,
+    lag: Lag,
+    /// The previous piece's commanded end position and velocity.
+    prev_end: Option<(Vec3, Vec3)>,
+}
+
+impl DriveStage {
+    pub fn new(drive: &Drive) -> DriveStage {
+        DriveStage {
+            response: match drive {
+                Drive::Rigid => None,
+                Drive::Spring(s) => Some(Response::new(s)),
+            },
+            lag: Lag::default(),
+            prev_end: None,
+        }
+    }
+
+    /// The next commanded piece with the lag at its start. A piece that does not start
+    /// where the previous ended (a re-homing) starts from rest on the command.
+    pub fn push(&mut self, seg: &Segment) -> ActualPiece {
+        let jump = match self.prev_end {
+            Some((p, v)) if (seg.p - p).norm() <= CONTINUITY_MM => seg.v - v,
+            Some(_) => {
+                self.lag = Lag::default();
+                Vec3::zeros()
+            }
+            None => seg.v,
+        };
+        if self.response.is_some() {
+            self.lag.de -= jump;
+        }
+        let piece = ActualPiece {
+            commanded: *seg,
+            lag: self.lag,
+            jump,
+        };
+        if let Some(r) = &self.response {
+            self.lag = r.lag_at(&self.lag, seg.a, seg.dt_s);
+        }
+        self.prev_end = Some(seg.end());
+        piece
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::motion::Phase;
+
+    /// ẍ = ω²(x_c − x) + 2ζω(ẋ_c − ẋ) integrated numerically: classic RK4 on (x, ẋ) from
+    /// rest at x = 0, with the commanded motion a function of time. Calls `on(t, x, ẋ, ẍ)`
+    /// after each step.
+    fn rk4(
+        spring: &Spring,
+        cmd: impl Fn(f64) -> (f64, f64),
+        t_end: f64,
+        dt: f64,
+        mut on: impl FnMut(f64, f64, f64, f64),
+    ) {
+        let w = std::f64::consts::TAU * spring.frequency_hz;
+        let z = spring.damping_ratio;
+        let f = |t: f64, x: f64, v: f64| {
+            let (xc, vc) = cmd(t);
+            w * w * (xc - x) + 2.0 * z * w * (vc - v)
+        };
+        let (mut t, mut x, mut v) = (0.0, 0.0, 0.0);
+        while t < t_end {
+            let (k1x, k1v) = (v, f(t, x, v));
+            let (k2x, k2v) = (
+                v + 0.5 * dt * k1v,
+                f(t + 0.5 * dt, x + 0.5 * dt * k1x, v + 0.5 * dt * k1v),
+            );
+            let (k3x, k3v) = (
+                v + 0.5 * dt * k2v,
+                f(t + 0.5 * dt, x + 0.5 * dt * k2x, v + 0.5 * dt * k2v),
+            );
+            let (k4x, k4v) = (v + dt * k3v, f(t + dt, x + dt * k3x, v + dt * k3v));
+            x += dt / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x);
+            v += dt / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v);
+            t += dt;
+            on(t, x, v, f(t, x, v));
+        }
+    }
+
+    fn piece(t0: f64, dt: f64, p: f64, v: f64, a: f64) -> Segment {
+        let x = |s: f64| Vec3::new(s, 0.0, 0.0);
+        Segment {
+            t0_s: t0,
+            dt_s: dt,
+            p: x(p),
+            v: x(v),
+            a: x(a),
+            line: 1,
+            phase: Phase::Cruise,
+        }
+    }
+
+    #[test]
+    fn the_closed_form_is_the_integrated_equation_through_a_jump_and_a_ramp() {
+        // From rest: a velocity step to 50 mm/s at t = 0 held 20 ms, then −2500 mm/s² for
+        // 20 ms (to rest), then rest; against RK4 at 1 µs on the same equation.
+        let spring = Spring {
+            frequency_hz: 60.0,
+            damping_ratio: 0.08,
+        };
+        let pieces = [
+            piece(0.0, 0.02, 0.0, 50.0, 0.0),
+            piece(0.02, 0.02, 1.0, 50.0, -2500.0),
+            piece(0.04, 0.06, 1.5, 0.0, 0.0),
+        ];
+        let mut stage = DriveStage::new(&Drive::Spring(spring));
+        let actual: Vec<ActualPiece> = pieces.iter().map(|s| stage.push(s)).collect();
+        let r = Response::new(&spring);
+        let on_piece = |t: f64| pieces.iter().rposition(|s| s.t0_s <= t).unwrap_or(0);
+        let closed = |t: f64| {
+            let a = &actual[on_piece(t)];
+            let tau = t - a.commanded.t0_s;
+            let (pc, vc, _) = a.commanded.at(tau);
+            let lag = r.lag_at(&a.lag, a.commanded.a, tau);
+            (pc.x + lag.e.x, vc.x + lag.de.x, r.acceleration(&lag).x)
+        };
+        let cmd = |t: f64| {
+            let (p, v, _) = pieces[on_piece(t)].at(t - pieces[on_piece(t)].t0_s);
+            (p.x, v.x)
+        };
+        let (mut worst, mut peak, mut n) = ([0.0_f64; 3], 0.0_f64, 0);
+        rk4(&spring, cmd, 0.1, 1e-6, |t, x, v, a| {
+            n += 1;
+            if n % 97 == 0 {
+                let (xc, vc, ac) = closed(t);
+                worst[0] = worst[0].max((xc - x).abs());
+                worst[1] = worst[1].max((vc - v).abs());
+                worst[2] = worst[2].max((ac - a).abs());
+                peak = peak.max(a.abs());
+            }
+        });
+        // A 50 mm/s jump through a 60 Hz, ζ = 0.08 drive: 2ζω·Δv right after the jump
+        // (the largest acceleration of all here), within 1e-6 of the integration.
+        let w = std::f64::consts::TAU * 60.0;
+        assert!(peak > 2.0 * 0.08 * w * 50.0 * 0.99, "{peak}");
+        assert!(
+            worst[0] < 1e-9 && worst[1] < 1e-6 && worst[2] < 1e-3,
+            "{worst:?}"
+        );
+    }
+
+    #[test]
+    fn a_constant_acceleration_settles_to_its_lag() {
+        // Under a constant commanded acceleration the lag settles to −a/ω² and the actual
+        // acceleration to the commanded one.
+        let spring = Spring {
+            frequency_hz: 40.0,
+            damping_ratio: 0.3,
+        };
+        let r = Response::new(&spring);
+        let a = Vec3::new(3000.0, -1000.0, 0.0);
+        let lag = r.lag_at(&Lag::default(), a, 1.0);
+        let w2 = (std::f64::consts::TAU * 40.0_f64).powi(2);
+        assert!((lag.e - a * (-1.0 / w2)).norm() < 1e-12);
+        assert!((r.acceleration(&lag) - a).norm() < 1e-6);
+        assert!((r.period_s() - 0.025).abs() < 1e-15);
+    }
+
+    #[test]
+    fn a_rigid_drive_has_no_lag_and_a_rehoming_resets_it() {
+        let mut rigid = DriveStage::new(&Drive::Rigid);
+        let a = rigid.push(&piece(0.0, 0.01, 0.0, 10.0, 0.0));
+        assert_eq!(a.lag, Lag::default());
+        assert_eq!(a.jump, Vec3::new(10.0, 0.0, 0.0));
+        let mut spring = DriveStage::new(&Drive::Spring(Spring {
+            frequency_hz: 50.0,
+            damping_ratio: 0.1,
+        }));
+        spring.push(&piece(0.0, 0.01, 0.0, 10.0, 0.0));
+        // 0.1 mm further than the first piece ends: a re-homing, from rest on the command.
+        let b = spring.push(&piece(0.01, 0.01, 0.2, 0.0, 0.0));
+        assert_eq!(b.lag, Lag::default());
+        assert_eq!(b.jump, Vec3::zeros());
+    }
+}

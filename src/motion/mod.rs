@@ -1,0 +1,110 @@
+//! The three motions of the nozzle, as pieces of polynomials in time:
+//!
+//! - **planned**: what the firmware's planner produces, trapezoids along straight moves
+//!   with instantaneous velocity changes at the junctions ([`planned`]);
+//! - **commanded**: what the firmware steps, the planned motion after Klipper's input
+//!   shaper ([`shaper`]); the carriage positions of this motion are a printer's step counts;
+//! - **actual**: what the machine does, each Cartesian axis following the command through
+//!   the drive's spring and damper ([`drive`]). Forces (eq. 14) come from this one.
+//!
+//! Each motion is a stream of [`Segment`]s, contiguous in time: over a segment every axis is
+//! a quadratic in time. Position is continuous from one segment to the next (except where
+//! the machine is re-homed); velocity may jump at a junction.
+
+pub mod drive;
+pub mod planned;
+pub mod shaper;
+
+use crate::path::Vec3;
+
+/// Where in its move a moment of the motion lies.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Phase {
+    Accel,
+    Cruise,
+    Decel,
+    /// Just after a junction's velocity jump, where the jump sets the force.
+    Corner,
+    /// The nozzle stands still (an extrude-only move, a dwell, before and after the print).
+    Rest,
+}
+
+impl Phase {
+    /// The name in reports (as in the JSON).
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Phase::Accel => "accel",
+            Phase::Cruise => "cruise",
+            Phase::Decel => "decel",
+            Phase::Corner => "corner",
+            Phase::Rest => "rest",
+        }
+    }
+}
+
+impl std::fmt::Display for Phase {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl serde::Serialize for Phase {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.as_str())
+    }
+}
+
+/// A piece of a motion: over [t0, t0 + dt) the nozzle is at p + v·τ + a·τ²/2, τ = t − t0
+/// (bed frame, mm, s).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Segment {
+    pub t0_s: f64,
+    pub dt_s: f64,
+    /// Position, velocity and acceleration at t0.
+    pub p: Vec3,
+    pub v: Vec3,
+    pub a: Vec3,
+    /// The G-code line of the planned move this piece belongs to.
+    pub line: u64,
+    pub phase: Phase,
+}
+
+impl Segment {
+    /// A stand-still of `dt_s` at `p` from `t0_s`.
+    pub fn rest(t0_s: f64, dt_s: f64, p: Vec3, line: u64) -> Segment {
+        Segment {
+            t0_s,
+            dt_s,
+            p,
+            v: Vec3::zeros(),
+            a: Vec3::zeros(),
+            line,
+            phase: Phase::Rest,
+        }
+    }
+
+    /// The end of the piece, s.
+    pub fn t1_s(&self) -> f64 {
+        self.t0_s + self.dt_s
+    }
+
+    /// Position, velocity and acceleration τ after t0.
+    #[inline(always)]
+    pub fn at(&self, tau_s: f64) -> (Vec3, Vec3, Vec3) {
+        (
+            self.p + self.v * tau_s + self.a * (0.5 * tau_s * tau_s),
+            self.v + self.a * tau_s,
+            self.a,
+        )
+    }
+
+    /// Position and velocity at the end (the left limit at t0 + dt).
+    pub fn end(&self) -> (Vec3, Vec3) {
+        let (p, v, _) = self.at(self.dt_s);
+        (p, v)
+    }
+}
+
+/// Position jumps smaller than this between consecutive pieces are rounding, mm; larger
+/// ones are a re-homing (G28), where the motion starts afresh.
+pub const CONTINUITY_MM: f64 = 1e-6;

@@ -1,0 +1,604 @@
+//! Klipper's input shaper: the commanded X and Y of the nozzle are weighted sums of the
+//! planned X and Y at a few time offsets (klippy/chelper/kin_shaper.c), with the shapers of
+//! klippy/extras/shaper_defs.py. Z is not shaped.
+//!
+//! The planned motion is a chain of quadratics in time, and so is every shifted copy of it:
+//! the commanded motion is again a chain of quadratics, whose breaks are the planned breaks
+//! shifted by each pulse's offset. [`Shaper`] computes it as a stream.
+
+use std::collections::VecDeque;
+
+use super::{CONTINUITY_MM, Segment};
+use crate::path::Vec3;
+
+/// The shaper types of Klipper's `shaper_defs.py`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShaperType {
+    Zv,
+    Mzv,
+    Zvd,
+    Ei,
+    TwoHumpEi,
+    ThreeHumpEi,
+}
+
+/// shaper_defs.py `SHAPER_VIBRATION_REDUCTION`: the EI shapers' vibration tolerance is its
+/// inverse.
+const SHAPER_VIBRATION_REDUCTION: f64 = 20.0;
+
+/// shaper_defs.py `DEFAULT_DAMPING_RATIO`.
+pub const DEFAULT_SHAPER_DAMPING_RATIO: f64 = 0.1;
+
+impl ShaperType {
+    /// The type of Klipper's `shaper_type` name (case-insensitive, as `SET_INPUT_SHAPER`).
+    pub fn from_name(name: &str) -> Option<ShaperType> {
+        Some(match name.to_ascii_lowercase().as_str() {
+            "zv" => ShaperType::Zv,
+            "mzv" => ShaperType::Mzv,
+            "zvd" => ShaperType::Zvd,
+            "ei" => ShaperType::Ei,
+            "2hump_ei" => ShaperType::TwoHumpEi,
+            "3hump_ei" => ShaperType::ThreeHumpEi,
+            _ => return None,
+        })
+    }
+
+    /// Klipper's name of the type.
+    pub fn name(self) -> &'static str {
+        match self {
+            ShaperType::Zv => "zv",
+            ShaperType::Mzv => "mzv",
+            ShaperType::Zvd => "zvd",
+            ShaperType::Ei => "ei",
+            ShaperType::TwoHumpEi => "2hump_ei",
+            ShaperType::ThreeHumpEi => "3hump_ei",
+        }
+    }
+
+    /// shaper_defs.py `INPUT_SHAPERS[].max_damping_ratio`.
+    pub fn max_damping_ratio(self) -> f64 {
+        match self {
+            ShaperType::Zv | ShaperType::Mzv | ShaperType::Zvd => 0.99,
+            ShaperType::Ei => 0.4,
+            ShaperType::TwoHumpEi => 0.3,
+            ShaperType::ThreeHumpEi => 0.2,
+        }
+    }
+
+    /// The pulses as shaper_defs.py defines them: amplitudes A_i (not normalised) and
+    /// times T_i ≥ 0, increasing, s.
+    pub fn pulses(self, freq_hz: f64, damping_ratio: f64) -> (Vec<f64>, Vec<f64>) {
+        let dr = damping_ratio;
+        let df = (1.0 - dr * dr).sqrt();
+        let t_d = 1.0 / (freq_hz * df);
+        let k = (-dr * std::f64::consts::PI / df).exp();
+        match self {
+            // get_zv_shaper
+            ShaperType::Zv => (vec![1.0, k], vec![0.0, 0.5 * t_d]),
+            // get_mzv_shaper with its defaults n = 3, t = 0.75: the classic MZV, whose
+            // amplitudes 1 − 1/√2, (√2 − 1)·K, (1 − 1/√2)·K² the least-squares system of
+            // get_mzv_coeffs reproduces, with K = exp(−0.75·ζπ/√(1−ζ²)).
+            ShaperType::Mzv => {
+                let k = (-0.75 * dr * std::f64::consts::PI / df).exp();
+                let a1 = 1.0 - std::f64::consts::FRAC_1_SQRT_2;
+                let a2 = (std::f64::consts::SQRT_2 - 1.0) * k;
+                (vec![a1, a2, a1 * k * k], vec![0.0, 0.375 * t_d, 0.75 * t_d])
+            }
+            // get_zvd_shaper
+            ShaperType::Zvd => (vec![1.0, 2.0 * k, k * k], vec![0.0, 0.5 * t_d, t_d]),
+            // get_ei_shaper
+            ShaperType::Ei => {
+                let v = 1.0 / SHAPER_VIBRATION_REDUCTION;
+                let a1 = (0.24968 + 0.24961 * v)
+                    + ((0.80008 + 1.23328 * v) + (0.49599 + 3.17316 * v) * dr) * dr;
+                let a3 = (0.25149 + 0.21474 * v)
+                    + ((-0.83249 + 1.41498 * v) + (0.85181 - 4.90094 * v) * dr) * dr;
+                let t2 = 0.4999
+                    + (((0.46159 + 8.57843 * v) * v)
+                        + (((4.26169 - 108.644 * v) * v) + ((1.75601 + 336.989 * v) * v) * dr)
+                            * dr)
+                        * dr;
+                (vec![a1, 1.0 - a1 - a3, a3], vec![0.0, t2 * t_d, t_d])
+            }
+            // get_2hump_ei_shaper
+            ShaperType::TwoHumpEi => from_expansion(
+                freq_hz,
+                dr,
+                &[
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.49890, 0.16270, -0.54262, 6.16180],
+                    [0.99748, 0.18382, -1.58270, 8.17120],
+                    [1.49920, -0.09297, -0.28338, 1.85710],
+                ],
+                &[
+                    [0.16054, 0.76699, 2.26560, -1.22750],
+                    [0.33911, 0.45081, -2.58080, 1.73650],
+                    [0.34089, -0.61533, -0.68765, 0.42261],
+                    [0.15997, -0.60246, 1.00280, -0.93145],
+                ],
+            ),
+            // get_3hump_ei_shaper
+            ShaperType::ThreeHumpEi => from_expansion(
+                freq_hz,
+                dr,
+                &[
+                    [0.0, 0.0, 0.0, 0.0],
+                    [0.49974, 0.23834, 0.44559, 12.4720],
+                    [0.99849, 0.29808, -2.36460, 23.3990],
+                    [1.49870, 0.10306, -2.01390, 17.0320],
+                    [1.99960, -0.28231, 0.61536, 5.40450],
+                ],
+                &[
+                    [0.11275, 0.76632, 3.29160, -1.44380],
+                    [0.23698, 0.61164, -2.57850, 4.85220],
+                    [0.30008, -0.19062, -2.14560, 0.13744],
+                    [0.23775, -0.73297, 0.46885, -2.08650],
+                    [0.11244, -0.45439, 0.96382, -1.46000],
+                ],
+            ),
+        }
+    }
+}
+
+/// shaper_defs.py `_get_shaper_from_expansion_coeffs`: each pulse's time (in periods) and
+/// amplitude as cubic polynomials of the damping ratio.
+fn from_expansion(
+    freq_hz: f64,
+    damping_ratio: f64,
+    t: &[[f64; 4]],
+    a: &[[f64; 4]],
+) -> (Vec<f64>, Vec<f64>) {
+    let poly = |c: &[f64; 4]| {
+        ((c[3] * damping_ratio + c[2]) * damping_ratio + c[1]) * damping_ratio + c[0]
+    };
+    let period = 1.0 / freq_hz;
+    (
+        a.iter().map(poly).collect(),
+        t.iter().map(|c| poly(c) * period).collect(),
+    )
+}
+
+/// One axis's shaper as configured: Klipper's `shaper_type_x`, `shaper_freq_x`,
+/// `damping_ratio_x` (or `_y`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AxisShaper {
+    pub kind: ShaperType,
+    /// 0 turns the axis's shaping off, as in Klipper.
+    pub freq_hz: f64,
+    pub damping_ratio: f64,
+}
+
+/// The input shaper of both axes (`None`: that axis is not shaped).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct InputShaper {
+    pub x: Option<AxisShaper>,
+    pub y: Option<AxisShaper>,
+}
+
+/// The most pulses a shaper has (3hump_ei); kin_shaper.c allows ten.
+const MAX_PULSES: usize = 5;
+
+/// A shaper's pulses as kin_shaper.c applies them: the commanded position is
+/// Σ a_i · planned(t + τ_i), the amplitudes normalised to a sum of 1 and the offsets
+/// centred on their weighted mean (`init_shaper`, `shift_pulses`), so that motion at
+/// constant speed is unchanged.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pulses {
+    n: usize,
+    a: [f64; MAX_PULSES],
+    tau_s: [f64; MAX_PULSES],
+}
+
+impl Pulses {
+    /// No shaping: one pulse of 1 at offset 0.
+    pub const IDENTITY: Pulses = Pulses {
+        n: 1,
+        a: [1.0, 0.0, 0.0, 0.0, 0.0],
+        tau_s: [0.0; MAX_PULSES],
+    };
+
+    /// The pulses of an axis's shaper (identity when it is off or its frequency is 0).
+    pub fn of(shaper: Option<AxisShaper>) -> Pulses {
+        let Some(s) = shaper.filter(|s| s.freq_hz > 0.0) else {
+            return Pulses::IDENTITY;
+        };
+        let (a, t) = s.kind.pulses(s.freq_hz, s.damping_ratio);
+        let sum: f64 = a.iter().sum();
+        let mut p = Pulses {
+            n: a.len().min(MAX_PULSES),
+            a: [0.0; MAX_PULSES],
+            tau_s: [0.0; MAX_PULSES],
+        };
+        // Reversed: the pulse of T_i looks T_i back into the planned motion.
+        for i in 0..p.n {
+            p.a[p.n - 1 - i] = a[i] / sum;
+            p.tau_s[p.n - 1 - i] = -t[i];
+        }
+        let mean: f64 = (0..p.n).map(|i| p.a[i] * p.tau_s[i]).sum();
+        for tau in &mut p.tau_s[..p.n] {
+            *tau -= mean;
+        }
+        p
+    }
+
+    /// (a_i, τ_i) of each pulse, offsets increasing.
+    pub fn iter(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
+        (0..self.n).map(|i| (self.a[i], self.tau_s[i]))
+    }
+
+    /// The smallest and largest offset, s.
+    pub fn span_s(&self) -> (f64, f64) {
+        (self.tau_s[0], self.tau_s[self.n - 1])
+    }
+}
+
+/// The commanded motion of a planned one, as a stream: planned pieces in, commanded pieces
+/// out as soon as no later planned piece can change them. The motion before the first and
+/// after the last planned piece is a rest where they start and end (Klipper's trapq).
+pub struct Shaper {
+    axes: [Pulses; 2],
+    /// The smallest and largest offset of any pulse.
+    tau_lo: f64,
+    tau_hi: f64,
+    /// Planned pieces still needed (the last one's end is known).
+    planned: VecDeque<Segment>,
+    /// Commanded motion is out up to here.
+    t_out: f64,
+    /// No piece has come since the start or the last re-homing.
+    fresh: bool,
+}
+
+impl Shaper {
+    pub fn new(shaper: &InputShaper) -> Shaper {
+        let axes = [Pulses::of(shaper.x), Pulses::of(shaper.y)];
+        let tau_lo = axes[0].span_s().0.min(axes[1].span_s().0);
+        let tau_hi = axes[0].span_s().1.max(axes[1].span_s().1);
+        Shaper {
+            axes,
+            tau_lo,
+            tau_hi,
+            planned: VecDeque::new(),
+            t_out: f64::NEG_INFINITY,
+            fresh: true,
+        }
+    }
+
+    /// Whether the commanded motion is the planned one.
+    pub fn is_identity(&self) -> bool {
+        self.axes == [Pulses::IDENTITY; 2]
+    }
+
+    /// Takes the next planned piece; hands on the commanded pieces now final. A piece that
+    /// does not start where the last ended (a re-homing) ends the motion so far first.
+    pub fn push(&mut self, seg: Segment, out: &mut impl FnMut(Segment)) {
+        if self.is_identity() {
+            out(seg);
+            return;
+        }
+        if let Some(last) = self.planned.back() {
+            let (p_end, _) = last.end();
+            if (seg.p - p_end).norm() > CONTINUITY_MM {
+                self.finish_until(seg.t0_s, out);
+            }
+        }
+        if self.fresh {
+            // The motion shaped from a rest starts when the last pulse first sees it.
+            self.t_out = seg.t0_s - self.tau_hi;
+            self.fresh = false;
+        }
+        let known_s = seg.t1_s();
+        self.planned.push_back(seg);
+        self.emit_until(known_s - self.tau_hi, out);
+    }
+
+    /// The end of the planned motion: hands on the rest of the commanded motion, until the
+    /// first pulse has seen the final rest.
+    pub fn finish(&mut self, out: &mut impl FnMut(Segment)) {
+        self.finish_until(f64::INFINITY, out);
+    }
+
+    /// Ends the motion so far, at the latest at `t_limit_s` (the start of what follows).
+    fn finish_until(&mut self, t_limit_s: f64, out: &mut impl FnMut(Segment)) {
+        if let Some(last) = self.planned.back() {
+            let end = (last.t1_s() - self.tau_lo).min(t_limit_s);
+            self.emit_until(end, out);
+        }
+        self.planned.clear();
+        self.fresh = true;
+    }
+
+    /// Hands on the commanded motion from `t_out` to `t_end`, a piece between each two
+    /// consecutive breaks.
+    fn emit_until(&mut self, t_end: f64, out: &mut impl FnMut(Segment)) {
+        while self.t_out < t_end {
+            let ta = self.t_out;
+            let tb = self.next_break(ta).min(t_end);
+            if tb - ta > 1e-12 {
+                out(self.piece(ta, tb));
+            }
+            self.t_out = tb;
+            self.drop_unneeded();
+        }
+    }
+
+    /// The first break of the commanded motion after `t`: a planned break b seen by a pulse
+    /// of offset τ is at b − τ; the planned breaks themselves (offset 0) split the pieces
+    /// by planned move too.
+    fn next_break(&self, t: f64) -> f64 {
+        let mut best = f64::INFINITY;
+        let offsets = self.axes.iter().flat_map(Pulses::iter).map(|(_, tau)| tau);
+        for tau in offsets.chain(std::iter::once(0.0)) {
+            // Breaks of the planned motion after t + τ: the pieces' starts and the end.
+            let want = t + tau;
+            let found = self
+                .planned
+                .iter()
+                .map(|s| s.t0_s)
+                .chain(self.planned.back().map(Segment::t1_s))
+                .find(|&b| b > want + 1e-12);
+            if let Some(b) = found {
+                best = best.min(b - tau);
+            }
+        }
+        best
+    }
+
+    /// The commanded piece over [ta, tb), inside which no pulse crosses a planned break.
+    fn piece(&self, ta: f64, tb: f64) -> Segment {
+        let mid = 0.5 * (ta + tb);
+        let own = self.planned_at(mid);
+        let (p0, v0, a0) = self.planned_state(own, ta);
+        let (mut p, mut v, mut a) = (p0, v0, a0);
+        for (axis, pulses) in self.axes.iter().enumerate() {
+            if *pulses == Pulses::IDENTITY {
+                continue;
+            }
+            let (mut pk, mut vk, mut ak) = (0.0, 0.0, 0.0);
+            for (w, tau) in pulses.iter() {
+                let s = self.planned_at(mid + tau);
+                let (ps, vs, as_) = self.planned_state(s, ta + tau);
+                pk += w * ps[axis];
+                vk += w * vs[axis];
+                ak += w * as_[axis];
+            }
+            p[axis] = pk;
+            v[axis] = vk;
+            a[axis] = ak;
+        }
+        let (line, phase) = match own {
+            Some(s) => (s.line, s.phase),
+            None => {
+                let s = self.planned.front().or(self.planned.back());
+                (s.map_or(0, |s| s.line), super::Phase::Rest)
+            }
+        };
+        Segment {
+            t0_s: ta,
+            dt_s: tb - ta,
+            p,
+            v,
+            a,
+            line,
+            phase,
+        }
+    }
+
+    /// The planned piece in force at `t` (None before the first or after the last).
+    fn planned_at(&self, t: f64) -> Option<&Segment> {
+        let i = self.planned.partition_point(|s| s.t1_s() <= t);
+        self.planned.get(i).filter(|s| s.t0_s <= t)
+    }
+
+    /// Planned position, velocity and acceleration at `t` on piece `s` (extended as a
+    /// polynomial), or at rest before the first / after the last piece.
+    fn planned_state(&self, s: Option<&Segment>, t: f64) -> (Vec3, Vec3, Vec3) {
+        match s {
+            Some(s) => s.at(t - s.t0_s),
+            None => {
+                let rest = |p: Vec3| (p, Vec3::zeros(), Vec3::zeros());
+                match (self.planned.front(), self.planned.back()) {
+                    (Some(first), _) if t < first.t0_s => rest(first.p),
+                    (_, Some(last)) => rest(last.end().0),
+                    _ => rest(Vec3::zeros()),
+                }
+            }
+        }
+    }
+
+    /// Drops the planned pieces no pulse will look at again.
+    fn drop_unneeded(&mut self) {
+        while self.planned.len() > 1
+            && self
+                .planned
+                .front()
+                .is_some_and(|s| s.t1_s() < self.t_out + self.tau_lo)
+        {
+            self.planned.pop_front();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::motion::Phase;
+
+    /// Klipper's shaper_defs.py at 40 Hz, damping 0.1, printed by Klipper itself
+    /// (commit 84104bb): amplitudes and times.
+    const KLIPPER_40HZ: [(ShaperType, &[f64], &[f64]); 6] = [
+        (
+            ShaperType::Zv,
+            &[1.0, 0.729247614287671],
+            &[0.0, 0.0125629726907402],
+        ),
+        (
+            ShaperType::Mzv,
+            &[0.292893218813452, 0.326874150410007, 0.182398743540587],
+            &[0.0, 0.00942222951805511, 0.0188444590361102],
+        ),
+        (
+            ShaperType::Zvd,
+            &[1.0, 1.45849522857534, 0.53180208294426],
+            &[0.0, 0.0125629726907402, 0.0251259453814803],
+        ),
+        (
+            ShaperType::Ei,
+            &[0.35488138, 0.45299809, 0.19212053],
+            &[0.0, 0.0126810037161785, 0.0251259453814803],
+        ),
+        (
+            ShaperType::TwoHumpEi,
+            &[0.2586675, 0.3601195, 0.27290311, 0.10882055],
+            &[0.0, 0.01289764, 0.025205155, 0.0372231575],
+        ),
+        (
+            ShaperType::ThreeHumpEi,
+            &[0.2208542, 0.2772112, 0.25969944, 0.167055, 0.0751792],
+            &[0.0, 0.0135125475, 0.025701275, 0.037647475, 0.0495731775],
+        ),
+    ];
+
+    #[test]
+    fn every_shaper_is_klippers() {
+        for (kind, a, t) in KLIPPER_40HZ {
+            let (ka, kt) = kind.pulses(40.0, 0.1);
+            assert_eq!(ka.len(), a.len(), "{}", kind.name());
+            for (x, y) in ka.iter().zip(a).chain(kt.iter().zip(t)) {
+                assert!((x - y).abs() < 1e-12, "{}: {x} vs {y}", kind.name());
+            }
+            assert_eq!(ShaperType::from_name(kind.name()), Some(kind));
+            assert_eq!(
+                ShaperType::from_name(&kind.name().to_uppercase()),
+                Some(kind)
+            );
+        }
+        assert_eq!(ShaperType::from_name("mzv(n=4)"), None);
+    }
+
+    #[test]
+    fn pulses_are_normalised_and_centred() {
+        for (kind, _, _) in KLIPPER_40HZ {
+            let p = Pulses::of(Some(AxisShaper {
+                kind,
+                freq_hz: 37.0,
+                damping_ratio: 0.05,
+            }));
+            let sum: f64 = p.iter().map(|(a, _)| a).sum();
+            let mean: f64 = p.iter().map(|(a, t)| a * t).sum();
+            assert!(
+                (sum - 1.0).abs() < 1e-15 && mean.abs() < 1e-15,
+                "{}",
+                kind.name()
+            );
+            let (lo, hi) = p.span_s();
+            assert!(lo < 0.0 && hi > 0.0);
+        }
+        let off = AxisShaper {
+            kind: ShaperType::Ei,
+            freq_hz: 0.0,
+            damping_ratio: 0.1,
+        };
+        assert_eq!(Pulses::of(Some(off)), Pulses::IDENTITY);
+    }
+
+    /// A planned chain: from rest, accelerate along X, cruise, a corner into Y (velocity
+    /// jump), decelerate to rest; a Z move meanwhile.
+    fn planned_chain() -> Vec<Segment> {
+        let seg = |t0: f64, dt: f64, p: [f64; 3], v: [f64; 3], a: [f64; 3]| Segment {
+            t0_s: t0,
+            dt_s: dt,
+            p: Vec3::from(p),
+            v: Vec3::from(v),
+            a: Vec3::from(a),
+            line: (t0 * 1000.0) as u64,
+            phase: Phase::Cruise,
+        };
+        let mut out = vec![seg(
+            0.1,
+            0.04,
+            [0.0, 0.0, 5.0],
+            [0.0, 0.0, 0.0],
+            [2500.0, 0.0, 10.0],
+        )];
+        let chain = |out: &mut Vec<Segment>, dt: f64, v: [f64; 3], a: [f64; 3]| {
+            let last = *out.last().unwrap();
+            let (p, _) = last.end();
+            out.push(seg(last.t1_s(), dt, [p.x, p.y, p.z], v, a));
+        };
+        chain(&mut out, 0.03, [100.0, 0.0, 0.4], [0.0, 0.0, 0.0]);
+        chain(&mut out, 0.02, [0.0, 80.0, 0.0], [0.0, 0.0, 0.0]);
+        chain(&mut out, 0.032, [0.0, 80.0, 0.0], [0.0, -2500.0, 0.0]);
+        out
+    }
+
+    /// The planned position at t, directly (rest before and after).
+    fn planned_at(chain: &[Segment], t: f64) -> Vec3 {
+        let first = chain[0];
+        if t < first.t0_s {
+            return first.p;
+        }
+        match chain.iter().find(|s| t < s.t1_s()) {
+            Some(s) => s.at(t - s.t0_s).0,
+            None => chain[chain.len() - 1].end().0,
+        }
+    }
+
+    #[test]
+    fn commanded_pieces_are_the_weighted_sum_of_shifted_planned_positions() {
+        let shaper = InputShaper {
+            x: Some(AxisShaper {
+                kind: ShaperType::Mzv,
+                freq_hz: 40.0,
+                damping_ratio: 0.1,
+            }),
+            y: Some(AxisShaper {
+                kind: ShaperType::ThreeHumpEi,
+                freq_hz: 55.0,
+                damping_ratio: 0.05,
+            }),
+        };
+        let chain = planned_chain();
+        let mut s = Shaper::new(&shaper);
+        let mut out = Vec::new();
+        for seg in &chain {
+            s.push(*seg, &mut |c| out.push(c));
+        }
+        s.finish(&mut |c| out.push(c));
+        // Contiguous in time and position; each piece a quadratic.
+        for w in out.windows(2) {
+            assert!((w[0].t1_s() - w[1].t0_s).abs() < 1e-12);
+            assert!((w[0].end().0 - w[1].p).norm() < 1e-9);
+        }
+        let (px, py) = (Pulses::of(shaper.x), Pulses::of(shaper.y));
+        let (first, last) = (out[0], out[out.len() - 1]);
+        assert!((first.t0_s - (0.1 - px.span_s().1.max(py.span_s().1))).abs() < 1e-12);
+        let end = chain[chain.len() - 1].t1_s() - px.span_s().0.min(py.span_s().0);
+        assert!((last.t1_s() - end).abs() < 1e-12);
+        // At many instants, against the convolution computed directly.
+        for k in 0..=2000 {
+            let t = first.t0_s + (last.t1_s() - first.t0_s) * k as f64 / 2000.0;
+            let piece = out.iter().find(|c| t < c.t1_s()).unwrap_or(&last);
+            let got = piece.at(t - piece.t0_s).0;
+            let conv = |p: &Pulses, axis: usize| -> f64 {
+                p.iter()
+                    .map(|(a, tau)| a * planned_at(&chain, t + tau)[axis])
+                    .sum()
+            };
+            let want = Vec3::new(conv(&px, 0), conv(&py, 1), planned_at(&chain, t).z);
+            assert!((got - want).norm() < 1e-9, "t = {t}: {got} vs {want}");
+        }
+    }
+
+    #[test]
+    fn no_shaper_hands_on_the_planned_pieces() {
+        let chain = planned_chain();
+        let mut s = Shaper::new(&InputShaper::default());
+        assert!(s.is_identity());
+        let mut out = Vec::new();
+        for seg in &chain {
+            s.push(*seg, &mut |c| out.push(c));
+        }
+        s.finish(&mut |c| out.push(c));
+        assert_eq!(out, chain);
+    }
+}
