@@ -359,3 +359,58 @@ fn crlf_comments_and_missing_final_newline_give_the_same_events() {
     assert!(std::str::from_utf8(&raw).is_err());
     assert_eq!((ev, diags.len()), (want, 0));
 }
+
+#[test]
+fn g92_before_homing_says_where_the_nozzle_is() {
+    // No G28: G92 X0 Y0 Z20 puts the nozzle at (0, 0, 20); the move goes to z = 25.
+    let (ev, d) = run("G92 X0 Y0 Z20 E0\nG1 Z25 X10 E1 F600\nG92 X0\nG1 X5\nG28\nG92 Z5\nG1 Z10\n");
+    assert!(d.is_empty(), "{d:?}");
+    let m = moves(&ev);
+    assert_eq!(line(&m[0]), (v(0.0, 0.0, 20.0), v(10.0, 0.0, 25.0)));
+    assert_eq!(m[0].offset_mm, Vec3::zeros());
+    // After the first move G92 shifts coordinates: X0 here is machine 10, X5 machine 15.
+    assert_eq!(line(&m[1]).1, v(15.0, 0.0, 25.0));
+    assert_eq!(m[1].offset_mm, v(10.0, 0.0, 0.0));
+    // After G28 too: Z5 at machine 290 makes Z10 machine 295.
+    assert_eq!(line(&m[2]), (v(0.0, 0.0, 290.0), v(0.0, 0.0, 295.0)));
+    assert_eq!(m[2].offset_mm, v(10.0, 0.0, 285.0));
+}
+
+#[test]
+fn m221_scales_extrusion_and_heater_waits_stop() {
+    let (ev, d) = run(
+        "G28\nM83\nG1 X1 E1\nM221 S50\nG1 X2 E1\nM109 S200\nM190 S60\nTEMPERATURE_WAIT SENSOR=extruder MINIMUM=190\nM221\nG1 X3 E1\n",
+    );
+    assert!(d.is_empty(), "{d:?}");
+    let e: Vec<f64> = moves(&ev).iter().map(|m| m.e_mm).collect();
+    assert_eq!(e, vec![1.0, 0.5, 1.0]);
+    let stops: Vec<u64> = ev
+        .iter()
+        .filter_map(|e| match e {
+            Event::Stop { line, .. } => Some(*line),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(stops, vec![1, 6, 7, 8]);
+}
+
+#[test]
+fn set_input_shaper_stops_and_changes_the_shaper() {
+    use delta_gcode::motion::shaper::ShaperType;
+    let (ev, d) = run(
+        "SET_INPUT_SHAPER SHAPER_FREQ_X=40 SHAPER_TYPE=EI DAMPING_RATIO_Y=0.05\n\
+         SET_INPUT_SHAPER SHAPER_TYPE_Y=bogus SHAPER_FREQ_Y=-3\n",
+    );
+    assert_eq!(d.len(), 2, "{d:?}");
+    assert!(
+        d.iter()
+            .all(|d| d.severity == Severity::Error && d.line == 2)
+    );
+    assert!(matches!(ev[0], Event::Stop { line: 1, .. }));
+    let Event::Shaper { line: 1, change } = ev[1] else {
+        panic!("{:?}", ev[1])
+    };
+    assert_eq!(change.kind, [Some(ShaperType::Ei), Some(ShaperType::Ei)]);
+    assert_eq!(change.freq_hz, [Some(40.0), None]);
+    assert_eq!(change.damping_ratio, [None, Some(0.05)]);
+}

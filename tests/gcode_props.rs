@@ -55,6 +55,12 @@ fn finite_event(e: &Event) -> bool {
         .iter()
         .flatten()
         .all(|v| v.is_finite() && *v >= 0.0),
+        Event::Shaper { change, .. } => change
+            .freq_hz
+            .iter()
+            .chain(&change.damping_ratio)
+            .flatten()
+            .all(|v| v.is_finite() && *v >= 0.0),
     }
 }
 

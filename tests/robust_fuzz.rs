@@ -75,6 +75,12 @@ fn check_event(e: &Event) {
                 assert!(v.is_finite() && v >= 0.0, "{e:?}");
             }
         }
+        Event::Shaper { change, .. } => {
+            let c = change;
+            for v in c.freq_hz.into_iter().chain(c.damping_ratio).flatten() {
+                assert!(v.is_finite() && v >= 0.0, "{e:?}");
+            }
+        }
     }
 }
 
@@ -444,7 +450,7 @@ fn any_event() -> impl Strategy<Value = Event> {
     let opt = || proptest::option::of(any_number());
     prop_oneof![
         6 => (line, any_number(), any_number(), 1..1000u64).prop_map(
-            |(path, e_mm, feed_mm_s, line)| Event::Move(Move { line, path, e_mm, feed_mm_s })
+            |(path, e_mm, feed_mm_s, line)| Event::Move(Move { line, path, e_mm, feed_mm_s, offset_mm: Vec3::zeros() })
         ),
         1 => (any_number(), 1..1000u64).prop_map(|(dwell_s, line)| Event::Stop { line, dwell_s }),
         1 => (opt(), opt(), opt(), opt(), 1..1000u64).prop_map(|(v, a, s, m, line)| Event::Limits {

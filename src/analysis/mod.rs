@@ -111,6 +111,9 @@ pub fn run<R: Read, O: Observer>(
                 if !planned.is_empty() {
                     hand_on(&mut planned, &mut sequencer);
                 }
+                if let Event::Shaper { change, .. } = event {
+                    sequencer.set_input_shaper(&change);
+                }
             },
             on_diag,
         );

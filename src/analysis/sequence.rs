@@ -8,7 +8,7 @@ use std::collections::VecDeque;
 use crate::machine::Machine;
 use crate::motion::drive::{ActualPiece, Drive, DriveStage, Response};
 use crate::motion::planned::PlannedPieces;
-use crate::motion::shaper::Shaper;
+use crate::motion::shaper::{InputShaper, Shaper, ShaperChange};
 use crate::motion::{CONTINUITY_MM, Segment};
 use crate::path::Vec3;
 use crate::planner::PlannedMove;
@@ -48,6 +48,8 @@ pub struct Sequencer<'c> {
     period_s: f64,
     response: Option<Response>,
     planned: PlannedPieces,
+    /// The input shaper in force, and its stream.
+    input_shaper: InputShaper,
     shaper: Shaper,
     drive: DriveStage,
     /// The last actual piece, held back until the next one tells its end (rigid impulses,
@@ -72,6 +74,7 @@ impl<'c> Sequencer<'c> {
                 Drive::Spring(s) => Some(Response::new(s)),
             },
             planned: PlannedPieces::new(),
+            input_shaper: machine.input_shaper,
             shaper: Shaper::new(&machine.input_shaper),
             drive: DriveStage::new(&machine.drive),
             held: None,
@@ -86,6 +89,7 @@ impl<'c> Sequencer<'c> {
     /// Takes the next planned move.
     pub fn push(&mut self, mv: &PlannedMove) {
         let mut stats = MoveStats::new(mv.line);
+        stats.offset_mm = mv.offset_mm.into();
         self.checker.check_geometry(mv, &mut stats);
         let end = mv.path.end();
         self.checked.push_back((stats, [end.x, end.y]));
@@ -96,6 +100,12 @@ impl<'c> Sequencer<'c> {
         for c in commanded {
             self.commanded(c);
         }
+    }
+
+    /// SET_INPUT_SHAPER: the moves after it are shaped with the changed shaper.
+    pub fn set_input_shaper(&mut self, change: &ShaperChange) {
+        self.input_shaper.apply(change);
+        self.shaper.reconfigure(&self.input_shaper);
     }
 
     /// The end of the motion: what the shaper still holds, the drive's settling, the last
@@ -127,18 +137,20 @@ impl<'c> Sequencer<'c> {
         self.span_s.map_or(0.0, |(a, b)| b - a)
     }
 
-    /// Hands out the batch built so far, less its last line if more of it may come.
+    /// Hands out the batch built so far. Unless `complete`, its last line may go on: the
+    /// next batch starts with a part of the same group, which the results join.
     pub fn take_batch(&mut self, complete: bool) -> Batch {
-        if complete || self.batch.moves.len() < 2 {
-            return std::mem::take(&mut self.batch);
-        }
-        let open = self.batch.moves.pop();
-        let mut batch = std::mem::take(&mut self.batch);
-        if let Some(mut open) = open {
-            let first = open.first;
-            self.batch.pieces = batch.pieces.split_off(first);
-            open.first = 0;
-            self.batch.moves.push(open);
+        let batch = std::mem::take(&mut self.batch);
+        if !complete && let Some(open) = batch.moves.last() {
+            let mut stats = MoveStats::new(open.stats.line);
+            stats.offset_mm = open.stats.offset_mm;
+            self.batch.moves.push(MoveWork {
+                group: open.group,
+                stats,
+                end_xy_mm: open.end_xy_mm,
+                first: 0,
+                count: 0,
+            });
         }
         batch
     }
@@ -273,5 +285,148 @@ impl<'c> Sequencer<'c> {
             first: self.batch.pieces.len(),
             count: 0,
         });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::analysis::{MoveResult, Observer, Scratch, TraceRows, Window};
+    use crate::gcode::{ArcRules, interpret};
+    use crate::machine::test_support::kossel_machine;
+    use crate::motion::drive::Spring;
+    use crate::motion::shaper::{AxisShaper, ShaperType};
+    use crate::planner::Planner;
+
+    fn plan(machine: &Machine, gcode: &str) -> Vec<PlannedMove> {
+        let mut planner = Planner::new(machine);
+        let mut moves = Vec::new();
+        let home = Vec3::new(0.0, 0.0, machine.geometry.home_z_mm);
+        interpret(
+            gcode.as_bytes(),
+            home,
+            ArcRules::default(),
+            |e| planner.push(e, &mut moves),
+            |_| {},
+        )
+        .unwrap();
+        planner.finish(&mut moves);
+        moves
+    }
+
+    /// A shaped, sprung machine and a file of short moves, an arc, a move out of reach.
+    fn setup() -> (Machine, String) {
+        let mut machine = kossel_machine();
+        machine.input_shaper.x = Some(AxisShaper {
+            kind: ShaperType::Mzv,
+            freq_hz: 40.0,
+            damping_ratio: 0.1,
+        });
+        machine.drive = Drive::Spring(Spring {
+            frequency_hz: 55.0,
+            damping_ratio: 0.08,
+        });
+        let mut gcode = String::from("G28\nG1 Z5 F6000\n");
+        for k in 0..40 {
+            gcode += &format!("G1 X{} Y{}\n", (k % 2) as f64 * 0.7, k as f64 * 0.3);
+        }
+        gcode += "G2 X10 Y12 I5 J0\nG1 X60 Y0 F3000\nG1 X0 Y-150\nG1 X0 Y0\nG4 P50\nG1 X1 Y1\n";
+        (machine, gcode)
+    }
+
+    fn sequence(machine: &Machine, moves: &[PlannedMove], batch_every: usize) -> Vec<Batch> {
+        let geometry = MoveChecker::new(machine, ());
+        let mut s = Sequencer::new(machine, &geometry);
+        let mut batches = Vec::new();
+        for mv in moves {
+            s.push(mv);
+            if s.pending_pieces() >= batch_every {
+                batches.push(s.take_batch(false));
+            }
+        }
+        s.finish();
+        batches.push(s.take_batch(true));
+        batches
+    }
+
+    #[test]
+    fn pieces_are_contiguous_and_each_line_is_one_group() {
+        let (machine, gcode) = setup();
+        let moves = plan(&machine, &gcode);
+        let whole = sequence(&machine, &moves, usize::MAX);
+        assert_eq!(whole.len(), 1);
+        let b = &whole[0];
+        for w in b.pieces.windows(2) {
+            let (a, c) = (w[0].piece.commanded, w[1].piece.commanded);
+            assert!((a.t1_s() - c.t0_s).abs() < 1e-9, "{a:?} {c:?}");
+            assert!((a.end().0 - c.p).norm() < 1e-9);
+        }
+        // One group per line with motion, in file order, covering every piece once.
+        let lines: Vec<u64> = b.moves.iter().map(|m| m.stats.line).collect();
+        let mut planned_lines: Vec<u64> = moves.iter().map(|m| m.line).collect();
+        planned_lines.dedup();
+        assert_eq!(lines, planned_lines);
+        assert_eq!(
+            b.moves.iter().map(|m| m.count).sum::<usize>(),
+            b.pieces.len()
+        );
+        for m in &b.moves {
+            for p in &b.pieces[m.first..m.first + m.count] {
+                assert_eq!(p.piece.commanded.line, m.stats.line);
+            }
+        }
+        // The arc (line 43) has many chords, all in its group; the move out of reach
+        // (line 45) is flagged by its planned move's check.
+        assert!(moves.iter().filter(|m| m.line == 43).count() > 5);
+        let far = b.moves.iter().find(|m| m.stats.line == 45).unwrap();
+        assert!(far.stats.problem.is_some());
+    }
+
+    #[test]
+    fn moves_sharing_blocks_and_batches_get_what_they_get_alone() {
+        let (machine, gcode) = setup();
+        let moves = plan(&machine, &gcode);
+        let observer = (
+            TraceRows,
+            Window {
+                from_s: 0.05,
+                to_s: 1.5,
+            },
+        );
+        let checker = MoveChecker::new(&machine, observer);
+        let mut scratch = Box::<Scratch>::default();
+        let whole = &sequence(&machine, &moves, usize::MAX)[0];
+        let mut together: Vec<MoveResult<_>> = Vec::new();
+        checker.check_moves(&mut scratch, &whole.pieces, &whole.moves, &mut together);
+        assert!(together.iter().map(|r| r.stats.samples).sum::<u64>() > 4000);
+        for (i, r) in together.iter().enumerate() {
+            let mut alone = Vec::new();
+            checker.check_moves(&mut scratch, &whole.pieces, &whole.moves[i..=i], &mut alone);
+            assert_eq!(r.stats, alone[0].stats, "move {i}");
+            assert_eq!(r.observed, alone[0].observed, "move {i}");
+            // One trace row per sample the model could take.
+            let rows = r.observed.0.iter().filter(|&&b| b == b'\n').count();
+            assert_eq!(rows as u64, r.stats.samples, "move {i}");
+        }
+        // Small batches split lines; their parts, merged, give the same results.
+        let mut merged: Vec<MoveResult<_>> = Vec::new();
+        for b in sequence(&machine, &moves, 7) {
+            let mut out = Vec::new();
+            checker.check_moves(&mut scratch, &b.pieces, &b.moves, &mut out);
+            for r in out {
+                match merged.last_mut() {
+                    Some(last) if last.group == r.group => {
+                        last.stats.merge(&r.stats);
+                        checker.observer().merge(&mut last.observed, r.observed);
+                    }
+                    _ => merged.push(r),
+                }
+            }
+        }
+        assert_eq!(merged.len(), together.len());
+        for (a, b) in merged.iter().zip(&together) {
+            assert_eq!(a.stats, b.stats);
+            assert_eq!(a.observed, b.observed);
+        }
     }
 }

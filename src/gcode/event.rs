@@ -1,6 +1,7 @@
 //! The plain data the G-code stage hands to the planner.
 
-use crate::path::Path;
+use crate::motion::shaper::ShaperChange;
+use crate::path::{Path, Vec3};
 
 /// One commanded segment (G0/G1/G2/G3, G10/G11, an E-only G1), with its source line.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -13,6 +14,8 @@ pub struct Move {
     pub e_mm: f64,
     /// Requested speed, mm/s: the modal F (mm/min) / 60, times the M220 factor.
     pub feed_mm_s: f64,
+    /// The G92 offset in force: machine position = the file's coordinates + this, mm.
+    pub offset_mm: Vec3,
 }
 
 /// A change of the planner's limits, taking effect at the line where it stands
@@ -38,6 +41,12 @@ pub enum Event {
     Limits {
         line: u64,
         change: LimitChange,
+    },
+    /// Klipper's SET_INPUT_SHAPER: the shaper for the moves that follow (the toolhead has
+    /// come to rest just before: a `Stop` precedes it).
+    Shaper {
+        line: u64,
+        change: ShaperChange,
     },
 }
 

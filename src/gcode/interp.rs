@@ -2,14 +2,16 @@
 //!
 //! Modal state as Klipper's `gcode_move` keeps it: absolute/relative XYZ (G90/G91), E
 //! relative when either G91 or M83 is in force, G92 offsets per axis (also E), units
-//! (G20/G21), the feed (F, mm/min, default 1500 = Klipper's 25 mm/s) and the M220 factor.
-//! Positions in events are machine positions in the bed frame: G92 shifts the G-code
-//! coordinates, not the nozzle. Before any G28 the nozzle is at the home position.
+//! (G20/G21), the feed (F, mm/min, default 1500 = Klipper's 25 mm/s), the M220 and M221
+//! factors. Positions in events are machine positions in the bed frame: G92 shifts the
+//! G-code coordinates, not the nozzle. Before any G28 the nozzle is at the home position,
+//! unless a G92 before the first G28 or move says where it is.
 
 use super::arc::{ArcRules, Chords, Plane};
 use super::parse::{Command, ParsedLine, param_f64, parse_line};
 use super::reader::BUFFER_BYTES;
 use super::{Diagnostic, Event, LimitChange, Move, Severity};
+use crate::motion::shaper::{ShaperChange, ShaperType};
 use crate::path::{Path, Vec3};
 
 /// Feed before the first F, mm/min (Klipper's default speed, 25 mm/s).
@@ -77,6 +79,11 @@ pub struct Interpreter {
     arc_rules: ArcRules,
     retraction: Retraction,
     retracted: bool,
+    /// M221: filament per E unit (Klipper's `extrude_factor`).
+    extrude_factor: f64,
+    /// Where the machine is is known: after the first G28 or move. Before, a G92 says
+    /// where the nozzle is instead of shifting coordinates.
+    placed: bool,
     stats: ReadStats,
 }
 
@@ -101,6 +108,8 @@ impl Interpreter {
             arc_rules,
             retraction: Retraction::default(),
             retracted: false,
+            extrude_factor: 1.0,
+            placed: false,
             stats: ReadStats::default(),
         }
     }
@@ -199,6 +208,16 @@ impl Interpreter {
                 if name.eq_ignore_ascii_case(b"SET_VELOCITY_LIMIT") {
                     let change = set_velocity_limit(p, d);
                     self.limits(change, ev);
+                } else if name.eq_ignore_ascii_case(b"SET_INPUT_SHAPER") {
+                    // input_shaper.py flushes the toolhead (flush_step_generation) first.
+                    let change = set_input_shaper(p, d);
+                    self.stop(0.0, ev);
+                    (ev.on_event)(Event::Shaper {
+                        line: ev.line,
+                        change,
+                    });
+                } else if name.eq_ignore_ascii_case(b"TEMPERATURE_WAIT") {
+                    self.stop(0.0, ev);
                 } else if name.eq_ignore_ascii_case(b"SET_RETRACTION") {
                     self.set_retraction_params(p, d);
                 } else {
@@ -249,6 +268,7 @@ impl Interpreter {
             (b'G', 28) => {
                 self.stop(0.0, ev);
                 self.pos = self.home;
+                self.placed = true;
             }
             (b'G', 90) => self.absolute = true,
             (b'G', 91) => self.absolute = false,
@@ -267,7 +287,16 @@ impl Interpreter {
                     _ => d.error(w.column, "M220 S must be a positive percentage".into()),
                 },
             },
-            (b'M', 400) => self.stop(0.0, ev),
+            // M400, and the heater waits: Klipper's wait_for_temperature asks the toolhead
+            // for its last move time, which flushes the lookahead.
+            (b'M', 400 | 109 | 190) => self.stop(0.0, ev),
+            (b'M', 221) => match p.word(b'S') {
+                None => self.extrude_factor = 1.0,
+                Some(w) => match w.value {
+                    Some(v) if v > 0.0 => self.extrude_factor = v / 100.0,
+                    _ => d.error(w.column, "M221 S must be a positive percentage".into()),
+                },
+            },
             _ => self.stats.unknown_commands += 1,
         }
     }
@@ -298,11 +327,13 @@ impl Interpreter {
         ev: &mut Events<impl FnMut(Event)>,
     ) {
         self.stats.moves += 1;
+        self.placed = true;
         (ev.on_event)(Event::Move(Move {
             line: ev.line,
             path,
             e_mm,
             feed_mm_s,
+            offset_mm: self.offset,
         }));
     }
 
@@ -360,7 +391,7 @@ impl Interpreter {
             v
         };
         self.e_pos += e;
-        e
+        e * self.extrude_factor
     }
 
     fn linear(
@@ -458,22 +489,26 @@ impl Interpreter {
     }
 
     /// G92: the current position gets the given G-code coordinates; without any axis,
-    /// all of X, Y, Z, E become 0 (Klipper).
+    /// all of X, Y, Z, E become 0 (Klipper). Before the first G28 or move nothing says
+    /// where the machine is: then the coordinates say where the nozzle is (a calibration
+    /// snippet starting `G92 X0 Y0 Z20`), and stay the machine's.
     fn set_position(&mut self, p: &ParsedLine) {
-        let mut any = false;
-        for (i, &a) in AXES.iter().enumerate() {
-            if let Some(v) = p.value(a) {
-                self.offset[i] = self.pos[i] - v * self.unit_mm;
-                any = true;
+        let given: [Option<f64>; 3] = AXES.map(|a| p.value(a).map(|v| v * self.unit_mm));
+        let e = p.value(b'E').map(|v| v * self.unit_mm);
+        let bare = given.iter().all(Option::is_none) && e.is_none();
+        for (i, v) in given.into_iter().enumerate() {
+            let v = if bare { Some(0.0) } else { v };
+            if let Some(v) = v {
+                if self.placed {
+                    self.offset[i] = self.pos[i] - v;
+                } else {
+                    self.pos[i] = v;
+                    self.offset[i] = 0.0;
+                }
             }
         }
-        if let Some(v) = p.value(b'E') {
-            self.e_offset = self.e_pos - v * self.unit_mm;
-            any = true;
-        }
-        if !any {
-            self.offset = self.pos;
-            self.e_offset = self.e_pos;
+        if let Some(v) = e.or(bare.then_some(0.0)) {
+            self.e_offset = self.e_pos - v;
         }
     }
 
@@ -576,6 +611,40 @@ fn set_velocity_limit(p: &ParsedLine, d: &mut Diags<impl FnMut(Diagnostic)>) -> 
             "ACCEL_TO_DECEL is ignored (deprecated in Klipper; use MINIMUM_CRUISE_RATIO)".into(),
         );
     }
+    change
+}
+
+/// Klipper's SET_INPUT_SHAPER parameters (input_shaper.py `InputShaperParams.update`):
+/// SHAPER_TYPE for both axes or SHAPER_TYPE_X/_Y, SHAPER_FREQ_X/_Y (≥ 0),
+/// DAMPING_RATIO_X/_Y (≥ 0). A type Klipper does not know is an error, as in Klipper.
+fn set_input_shaper(p: &ParsedLine, d: &mut Diags<impl FnMut(Diagnostic)>) -> ShaperChange {
+    let mut change = ShaperChange::default();
+    let kind = |key: &str, d: &mut Diags<_>| -> Option<ShaperType> {
+        let q = p.param(key)?;
+        let name = String::from_utf8_lossy(q.value);
+        let k = ShaperType::from_name(&name);
+        if k.is_none() {
+            d.error(q.column, format!("{key}: unsupported shaper type `{name}`"));
+        }
+        k
+    };
+    let both = kind("SHAPER_TYPE", d);
+    change.kind = [
+        kind("SHAPER_TYPE_X", d).or(both),
+        kind("SHAPER_TYPE_Y", d).or(both),
+    ];
+    let number = |key: &str, d: &mut Diags<_>| -> Option<f64> {
+        let q = p.param(key)?;
+        match param_f64(q.value) {
+            Some(v) if v >= 0.0 => Some(v),
+            _ => {
+                d.error(q.column, format!("SET_INPUT_SHAPER {key}: invalid value"));
+                None
+            }
+        }
+    };
+    change.freq_hz = [number("SHAPER_FREQ_X", d), number("SHAPER_FREQ_Y", d)];
+    change.damping_ratio = [number("DAMPING_RATIO_X", d), number("DAMPING_RATIO_Y", d)];
     change
 }
 

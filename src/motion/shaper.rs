@@ -175,6 +175,37 @@ pub struct InputShaper {
     pub y: Option<AxisShaper>,
 }
 
+/// What a SET_INPUT_SHAPER line sets (each `None` keeps the value in force).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ShaperChange {
+    /// SHAPER_TYPE (both axes), SHAPER_TYPE_X, SHAPER_TYPE_Y.
+    pub kind: [Option<ShaperType>; 2],
+    /// SHAPER_FREQ_X, SHAPER_FREQ_Y, Hz (0 turns the axis's shaping off).
+    pub freq_hz: [Option<f64>; 2],
+    /// DAMPING_RATIO_X, DAMPING_RATIO_Y.
+    pub damping_ratio: [Option<f64>; 2],
+}
+
+impl InputShaper {
+    /// The shaper after a SET_INPUT_SHAPER: each axis's type, frequency and damping as given,
+    /// the others kept (an axis that was off starts from Klipper's defaults, mzv and 0.1).
+    pub fn apply(&mut self, change: &ShaperChange) {
+        for (axis, slot) in [&mut self.x, &mut self.y].into_iter().enumerate() {
+            let cur = slot.unwrap_or(AxisShaper {
+                kind: ShaperType::Mzv,
+                freq_hz: 0.0,
+                damping_ratio: DEFAULT_SHAPER_DAMPING_RATIO,
+            });
+            let new = AxisShaper {
+                kind: change.kind[axis].unwrap_or(cur.kind),
+                freq_hz: change.freq_hz[axis].unwrap_or(cur.freq_hz),
+                damping_ratio: change.damping_ratio[axis].unwrap_or(cur.damping_ratio),
+            };
+            *slot = (new.freq_hz > 0.0).then_some(new);
+        }
+    }
+}
+
 /// The most pulses a shaper has (3hump_ei); kin_shaper.c allows ten.
 const MAX_PULSES: usize = 5;
 
@@ -246,6 +277,8 @@ pub struct Shaper {
     t_out: f64,
     /// No piece has come since the start or the last re-homing.
     fresh: bool,
+    /// A new configuration, for the pieces after the next one.
+    pending: Option<InputShaper>,
 }
 
 impl Shaper {
@@ -260,7 +293,15 @@ impl Shaper {
             planned: VecDeque::new(),
             t_out: f64::NEG_INFINITY,
             fresh: true,
+            pending: None,
         }
+    }
+
+    /// Shapes the pieces from the next one on with `shaper` (SET_INPUT_SHAPER; the toolhead
+    /// is at rest). The motion so far ends as the old shaper has it, until the new one
+    /// starts.
+    pub fn reconfigure(&mut self, shaper: &InputShaper) {
+        self.pending = Some(*shaper);
     }
 
     /// Whether the commanded motion is the planned one.
@@ -271,6 +312,11 @@ impl Shaper {
     /// Takes the next planned piece; hands on the commanded pieces now final. A piece that
     /// does not start where the last ended (a re-homing) ends the motion so far first.
     pub fn push(&mut self, seg: Segment, out: &mut impl FnMut(Segment)) {
+        if let Some(new) = self.pending.take() {
+            let next = Shaper::new(&new);
+            self.finish_until(seg.t0_s - next.tau_hi, out);
+            *self = next;
+        }
         if self.is_identity() {
             out(seg);
             return;

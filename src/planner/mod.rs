@@ -11,7 +11,7 @@ mod tests;
 
 use crate::gcode::Event;
 use crate::machine::Machine;
-use crate::path::Path;
+use crate::path::{Path, Vec3};
 
 use limits::MoveLimits;
 use queue::Lookahead;
@@ -40,6 +40,8 @@ pub struct PlannedMove {
     pub decel_t_s: f64,
     /// Print time at the start of the move.
     pub t0_s: f64,
+    /// The G92 offset in force for the move (machine = file coordinates + offset), mm.
+    pub offset_mm: Vec3,
 }
 
 impl PlannedMove {
@@ -79,6 +81,8 @@ impl Planner {
                 }
             }
             Event::Limits { change, .. } => self.limits.apply(&change),
+            // The shaper acts after planning; the Stop before it has flushed the lookahead.
+            Event::Shaper { .. } => {}
         }
     }
 

@@ -7,7 +7,7 @@
 use std::collections::VecDeque;
 
 use crate::gcode::Move;
-use crate::path::Path;
+use crate::path::{Path, Vec3};
 
 use super::PlannedMove;
 
@@ -26,6 +26,7 @@ pub(super) struct QueuedMove {
     line: u64,
     path: Path,
     e_mm: f64,
+    offset_mm: Vec3,
     pub(super) kinematic: bool,
     pub(super) move_d_mm: f64,
     pub(super) accel_mm_s2: f64,
@@ -57,6 +58,7 @@ impl QueuedMove {
             line: m.line,
             path: m.path,
             e_mm: m.e_mm,
+            offset_mm: m.offset_mm,
             kinematic,
             move_d_mm,
             accel_mm_s2,
@@ -161,6 +163,7 @@ impl QueuedMove {
             cruise_t_s: cruise_d / cruise_v,
             decel_t_s: decel_d / ((end_v + cruise_v) * 0.5),
             t0_s,
+            offset_mm: self.offset_mm,
         }
     }
 }

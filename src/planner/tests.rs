@@ -64,6 +64,7 @@ fn mv(line: u64, path: Path, e_mm: f64, feed_mm_s: f64) -> Event {
         path,
         e_mm,
         feed_mm_s,
+        offset_mm: Vec3::zeros(),
     })
 }
 

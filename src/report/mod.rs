@@ -190,7 +190,9 @@ impl Report {
                 *t_s,
                 format!(
                     "UNREACHABLE at X{:.3} Y{:.3} Z{:.3}: {reason}",
-                    pos_mm[0], pos_mm[1], pos_mm[2]
+                    pos_mm[0] - m.offset_mm[0],
+                    pos_mm[1] - m.offset_mm[1],
+                    pos_mm[2] - m.offset_mm[2]
                 ),
             ),
             Some(

@@ -75,6 +75,9 @@ pub struct MoveStats {
     /// Near a singular pose: the tower (0 = A) whose carriage moves fastest relative to the
     /// nozzle, and that speed ratio, when it exceeds [`NEAR_SINGULAR_RATIO`].
     pub near_singular: Option<(usize, f64)>,
+    /// The line's G92 offset: positions are reported as the file writes them, machine
+    /// position − offset, mm.
+    pub offset_mm: [f64; 3],
 }
 
 /// A carriage moving this many times faster than the nozzle marks a near-singular pose (the
@@ -92,6 +95,7 @@ impl MoveStats {
             max_energy_residual_w: 0.0,
             problem: None,
             near_singular: None,
+            offset_mm: [0.0; 3],
         }
     }
 
@@ -147,6 +151,7 @@ impl MoveStats {
     /// (an earlier peak wins a tie), the most severe problem, the fastest carriage ratio.
     pub fn merge(&mut self, later: &MoveStats) {
         self.samples += later.samples;
+        self.offset_mm = later.offset_mm;
         for i in 0..3 {
             if later.peak_force_n[i] > self.peak_force_n[i] {
                 self.peak_force_n[i] = later.peak_force_n[i];

@@ -160,3 +160,167 @@ fn first_grid_index(t: f64, period_s: f64) -> i64 {
     }
     k
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::motion::Segment;
+    use crate::motion::drive::{Drive, DriveStage, Lag, Spring};
+
+    const TS: f64 = 0.001;
+
+    fn seg(t0: f64, dt: f64, p: Vec3, v: Vec3, a: Vec3) -> Segment {
+        Segment {
+            t0_s: t0,
+            dt_s: dt,
+            p,
+            v,
+            a,
+            line: 3,
+            phase: Phase::Cruise,
+        }
+    }
+
+    fn work(s: Segment, jump: Vec3, kicks: Kicks, end_sample: bool) -> PieceWork {
+        PieceWork {
+            piece: ActualPiece {
+                commanded: s,
+                lag: Lag::default(),
+                jump,
+            },
+            kicks,
+            end_sample,
+            corner_until_s: f64::NEG_INFINITY,
+        }
+    }
+
+    fn samples(w: &PieceWork, r: Option<&Response>) -> Vec<Sample> {
+        let mut out = Vec::new();
+        sample_piece(w, r, TS, &mut |s| out.push(s));
+        out
+    }
+
+    #[test]
+    fn the_start_every_grid_point_inside_and_the_end_when_asked() {
+        let v = Vec3::new(10.0, 0.0, 0.0);
+        let a = seg(0.0005, 0.0027, Vec3::zeros(), v, Vec3::zeros());
+        let (p, _) = a.end();
+        let b = seg(0.0032, 0.0028, p, v, Vec3::zeros());
+        let t: Vec<f64> = samples(&work(a, Vec3::zeros(), Kicks::default(), true), None)
+            .iter()
+            .chain(&samples(
+                &work(b, Vec3::zeros(), Kicks::default(), false),
+                None,
+            ))
+            .map(|s| s.t_s)
+            .collect();
+        let (end_a, start_b) = (a.t1_s(), b.t0_s);
+        assert_eq!(
+            t,
+            [0.0005, 0.001, 0.002, 0.003, end_a, start_b, 0.004, 0.005]
+        );
+        // A piece starting on a grid point: that point is its start, once.
+        let c = seg(0.002, 0.0015, p, v, Vec3::zeros());
+        let t: Vec<f64> = samples(&work(c, Vec3::zeros(), Kicks::default(), false), None)
+            .iter()
+            .map(|s| s.t_s)
+            .collect();
+        assert_eq!(t, [0.002, 0.003]);
+    }
+
+    #[test]
+    fn a_rigid_corner_between_long_pieces_is_dv_over_ts() {
+        // 60 mm/s along X, then along Y: |Δv| = 60√2 at t = 0.1, spread over one period.
+        let (vx, vy) = (Vec3::new(60.0, 0.0, 0.0), Vec3::new(0.0, 60.0, 0.0));
+        let a = seg(0.05, 0.05, Vec3::zeros(), vx, Vec3::zeros());
+        let (p, _) = a.end();
+        let b = seg(0.1, 0.05, p, vy, Vec3::zeros());
+        let jump = vy - vx;
+        let ka = Kicks::around(a.t0_s, a.dt_s, Vec3::zeros(), 0.0, jump, b.dt_s, TS);
+        let kb = Kicks::around(b.t0_s, b.dt_s, jump, a.dt_s, Vec3::zeros(), 0.0, TS);
+        let sa = samples(&work(a, Vec3::zeros(), ka, true), None);
+        let sb = samples(&work(b, jump, kb, false), None);
+        let left = sa.last().unwrap();
+        let right = &sb[0];
+        for s in [left, right] {
+            assert_eq!(s.t_s, 0.1);
+            assert!((s.acc_mm_s2 - jump / TS).norm() < 1e-9, "{}", s.acc_mm_s2);
+            assert_eq!(s.phase, Phase::Corner);
+        }
+        // Half a period on either side the box ends.
+        assert!(
+            sa.iter()
+                .chain(&sb)
+                .filter(|s| s.phase == Phase::Corner)
+                .count()
+                <= 4
+        );
+        assert_eq!(sb[1].acc_mm_s2, Vec3::zeros());
+    }
+
+    #[test]
+    fn a_circle_of_short_rigid_chords_shows_v2_over_r_at_every_sample() {
+        // Chords lasting 0.7·Ts at 80 mm/s on r = 10: each junction's box reaches half a
+        // chord either way, the boxes tile the time line, every sample sees one junction:
+        // |Δv|/τ = v·2sin(θ/2)/(2r·sin(θ/2)/v) = v²/r.
+        let (r, v) = (10.0, 80.0);
+        let n = (std::f64::consts::TAU * r / (0.7 * TS * v)).round() as usize;
+        let th = std::f64::consts::TAU / n as f64;
+        let chord = 2.0 * r * (th / 2.0).sin();
+        let tau = chord / v;
+        assert!(tau < TS && tau > 0.6 * TS, "{tau}");
+        let pt = |k: usize| {
+            let a = th * k as f64;
+            Vec3::new(r * a.cos(), r * a.sin(), 1.0)
+        };
+        let dir = |k: usize| (pt(k + 1) - pt(k)) / chord;
+        let mut acc = Vec::new();
+        for k in 1..n - 1 {
+            let s = seg(k as f64 * tau, tau, pt(k), dir(k) * v, Vec3::zeros());
+            let jin = (dir(k) - dir(k - 1)) * v;
+            let jout = (dir(k + 1) - dir(k)) * v;
+            let kicks = Kicks::around(s.t0_s, tau, jin, tau, jout, tau, TS);
+            for x in samples(&work(s, jin, kicks, true), None) {
+                acc.push(x.acc_mm_s2.norm());
+            }
+        }
+        assert!(acc.len() > 100);
+        for a in acc {
+            assert!((a - v * v / r).abs() < 1e-6 * v * v / r, "{a}");
+        }
+    }
+
+    #[test]
+    fn with_a_drive_a_sample_is_the_command_plus_the_lag() {
+        let spring = Spring {
+            frequency_hz: 45.0,
+            damping_ratio: 0.1,
+        };
+        let r = Response::new(&spring);
+        let mut drive = DriveStage::new(&Drive::Spring(spring));
+        let a = seg(
+            0.0,
+            0.02,
+            Vec3::zeros(),
+            Vec3::new(50.0, 0.0, 0.0),
+            Vec3::zeros(),
+        );
+        let piece = drive.push(&a);
+        let w = PieceWork {
+            piece,
+            kicks: Kicks::default(),
+            end_sample: false,
+            corner_until_s: 0.5 / 45.0,
+        };
+        for s in samples(&w, Some(&r)) {
+            let lag = r.lag_at(&piece.lag, a.a, s.t_s);
+            let (p, v, _) = a.at(s.t_s);
+            assert_eq!(s.cmd_pos_mm, p);
+            assert!((s.pos_mm - (p + lag.e)).norm() < 1e-15);
+            assert!((s.vel_mm_s - (v + lag.de)).norm() < 1e-12);
+            assert_eq!(s.acc_mm_s2, r.acceleration(&lag));
+            let corner = s.t_s < 0.5 / 45.0;
+            assert_eq!(s.phase == Phase::Corner, corner, "{}", s.t_s);
+        }
+    }
+}
