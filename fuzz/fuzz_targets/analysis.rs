@@ -25,7 +25,7 @@ fuzz_target!(|data: &[u8]| {
             let s = &r.stats;
             assert!(s.peak_force_n.iter().all(|f| f.is_finite()), "{s:?}");
             assert!(s.peak_t_s.iter().all(|t| t.is_finite()), "{s:?}");
-            assert!(s.max_energy_residual_w.is_finite(), "{s:?}");
+            assert!(s.worst.iter().all(|w| w.force_n.is_finite() && w.available_n.is_finite()), "{s:?}");
         },
         |d| assert!(d.line >= 1 && d.column >= 1, "{d:?}"),
     )

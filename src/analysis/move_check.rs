@@ -156,7 +156,10 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
                 forces: &scratch.forces,
                 lanes: j0..j1,
             };
-            Verdict.observe(&self.model, &mut r.stats, &run);
+            let verdict = Verdict {
+                motors: &self.machine.motors,
+            };
+            verdict.observe(&self.model, &mut r.stats, &run);
             self.observer.observe(&self.model, &mut r.observed, &run);
             j0 = j1;
         }

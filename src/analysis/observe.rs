@@ -4,10 +4,11 @@
 
 use std::ops::Range;
 
-use crate::delta::{DeltaModel, ForceBlock, StateBlock, Unreachable};
+use crate::delta::{BLOCK, DeltaModel, ForceBlock, StateBlock, Unreachable};
+use crate::machine::Motors;
 use crate::motion::Phase;
 use crate::path::Vec3;
-use crate::report::{MoveStats, Problem};
+use crate::report::{MoveStats, Problem, RunForces};
 
 /// A run of consecutive samples of one move, evaluated in one block.
 pub struct Evaluated<'a> {
@@ -142,11 +143,14 @@ impl Observer for Window {
     }
 }
 
-/// The verdict's statistics: each move's peak forces, when and in which phase they came,
-/// and the poses the model could not take.
-pub struct Verdict;
+/// The verdict's statistics: each move's peak forces, and the instant each motor was asked
+/// the largest share of the force it can give at its carriage's speed (the motor's
+/// torque-speed curve), when and in which phase; and the poses the model could not take.
+pub struct Verdict<'m> {
+    pub motors: &'m Motors,
+}
 
-impl Observer for Verdict {
+impl Observer for Verdict<'_> {
     type PerMove = MoveStats;
 
     fn start(&self, line: u64) -> MoveStats {
@@ -156,28 +160,30 @@ impl Observer for Verdict {
     #[inline(always)]
     fn observe(&self, model: &DeltaModel, stats: &mut MoveStats, run: &Evaluated) {
         let (lanes, fo) = (run.lanes.clone(), run.forces);
+        let mut available = [[0.0; BLOCK]; 3];
+        for i in 0..3 {
+            for j in lanes.clone() {
+                available[i][j] = self.motors.available_force_n(fo.dq_mm_s[i][j].abs());
+            }
+        }
+        let forces = |j0: usize, j1: usize| RunForces {
+            t_s: &run.t_s[j0..j1],
+            phase: &run.phase[j0..j1],
+            force_n: [0, 1, 2].map(|i| &fo.force_n[i][j0..j1]),
+            available_n: [0, 1, 2].map(|i| &available[i][j0..j1]),
+            speed_mm_s: [0, 1, 2].map(|i| &fo.dq_mm_s[i][j0..j1]),
+        };
         if fo.ok[lanes.clone()].iter().all(|&ok| ok) {
-            let f = &fo.force_n;
-            stats.add_run(
-                &run.t_s[lanes.clone()],
-                &run.phase[lanes.clone()],
-                [
-                    &f[0][lanes.clone()],
-                    &f[1][lanes.clone()],
-                    &f[2][lanes.clone()],
-                ],
-                &fo.energy_residual_w[lanes],
-            );
+            stats.add_run(&forces(lanes.start, lanes.end));
             return;
         }
         for j in lanes {
-            let t = run.t_s[j];
             if fo.ok[j] {
-                stats.add(t, run.phase[j], run.force_n(j), fo.energy_residual_w[j]);
+                stats.add_run(&forces(j, j + 1));
             } else {
                 let (pos, vel, acc) = run.state(j);
                 if let Err(e) = model.evaluate(pos, vel, acc) {
-                    stats.flag(unreachable(e, t, pos));
+                    stats.flag(unreachable(e, run.t_s[j], pos));
                 }
             }
         }

@@ -5,9 +5,9 @@ use serde::Serialize;
 use super::observe::{Evaluated, Observer};
 use crate::delta::DeltaModel;
 
-/// One row of the trace CSV: the nozzle's state at one sample, the carriages' (eq. 6-8),
-/// the forces (eq. 14) and both sides of the energy balance (eq. 20). Field names are the
-/// column names.
+/// One row of the trace CSV: the nozzle's actual state at one sample, the carriages'
+/// (eq. 6-8), the commanded carriage heights, the forces (eq. 14) and both sides of the
+/// energy balance (eq. 20). Field names are the column names.
 #[derive(Clone, Copy, Debug, Default, Serialize)]
 pub struct TraceRow {
     pub t_s: f64,
@@ -24,6 +24,10 @@ pub struct TraceRow {
     pub q1_mm: f64,
     pub q2_mm: f64,
     pub q3_mm: f64,
+    /// The commanded carriage heights: what the firmware's steps encode.
+    pub q1_cmd_mm: f64,
+    pub q2_cmd_mm: f64,
+    pub q3_cmd_mm: f64,
     pub dq1_mm_s: f64,
     pub dq2_mm_s: f64,
     pub dq3_mm_s: f64,
@@ -69,6 +73,9 @@ impl Observer for TraceRows {
             let Ok(st) = model.evaluate(p, v, a) else {
                 continue;
             };
+            // The command is where the steps are; a commanded pose out of reach (the actual
+            // one was in reach) has no heights: NaN would be no number, so the actual ones.
+            let q_cmd = model.inverse(run.cmd_pos(j)).unwrap_or(st.q_mm);
             let (q, dq, ddq, f) = (st.q_mm, st.dq_mm_s, st.ddq_mm_s2, st.force_n);
             let _ = w.serialize(TraceRow {
                 t_s: run.t_s[j],
@@ -85,6 +92,9 @@ impl Observer for TraceRows {
                 q1_mm: q[0],
                 q2_mm: q[1],
                 q3_mm: q[2],
+                q1_cmd_mm: q_cmd[0],
+                q2_cmd_mm: q_cmd[1],
+                q3_cmd_mm: q_cmd[2],
                 dq1_mm_s: dq[0],
                 dq2_mm_s: dq[1],
                 dq3_mm_s: dq[2],
@@ -116,6 +126,10 @@ mod tests {
         let h = trace_header();
         assert!(h.starts_with("t_s,line,x_mm,y_mm,z_mm,vx_mm_s"), "{h}");
         assert!(h.ends_with("f3_n,power_w,energy_rate_w\n"), "{h}");
-        assert_eq!(h.split(',').count(), 25);
+        assert_eq!(h.split(',').count(), 28);
+        assert!(
+            h.contains(",q1_mm,q2_mm,q3_mm,q1_cmd_mm,q2_cmd_mm,q3_cmd_mm,"),
+            "{h}"
+        );
     }
 }

@@ -23,6 +23,10 @@ pub struct DynState {
     pub force_n: [f64; 3],
     /// Lagrange multipliers λ_i (eq. 13), N/m.
     pub lambda: [f64; 3],
+    /// Each parallelogram's pull on the platform towards its carriage, both rods together,
+    /// N, positive in tension: the constraint force λ_i·∂Γ_i/∂P = 2λ_i·(A_i − P), of
+    /// magnitude 2|λ_i|·l.
+    pub arm_tension_n: [f64; 3],
     /// Kinetic energy of the lumped masses, J.
     pub kinetic_j: f64,
     /// Potential energy, bed (z = 0) reference, J.
@@ -159,13 +163,15 @@ impl DeltaModel {
         let inv_f2 = (dot(cof[0], cof[0]) + dot(cof[1], cof[1]) + dot(cof[2], cof[2]))
             * c.inv_det
             * c.inv_det;
+        // eq. 13, Jx in m: Jx⁻ᵀ in 1/m = 1000 × its value in 1/mm.
+        let lambda = c.w.map(|w| 0.5 * mp * w / MM);
         Ok(DynState {
             q_mm: q,
             dq_mm_s: dq,
             ddq_mm_s2: c.ddq,
             force_n: c.force,
-            // eq. 13, Jx in m: Jx⁻ᵀ in 1/m = 1000 × its value in 1/mm.
-            lambda: c.w.map(|w| 0.5 * mp * w / MM),
+            lambda,
+            arm_tension_n: [0, 1, 2].map(|i| 2.0 * lambda[i] * self.arm_mm[i] * MM),
             kinetic_j,
             potential_j,
             power_w: c.power_w,
@@ -186,7 +192,7 @@ impl DeltaModel {
         }
     }
 
-    /// Actuator forces and the eq. 20 residual |dE/dt − Σ Q_i q̇_i| over a block of states,
+    /// Actuator forces (eq. 14) and carriage velocities (eq. 7) over a block of states,
     /// the first `len` lanes (the lanes after them, up to a multiple of eight, are computed
     /// too, from whatever they hold, and mean nothing). Compiled for AVX-512 and AVX2 as well
     /// as the baseline, chosen at run time: the same operations in the same order, so the
@@ -233,7 +239,9 @@ impl DeltaModel {
             out.force_n[0][j] = c.force[0];
             out.force_n[1][j] = c.force[1];
             out.force_n[2][j] = c.force[2];
-            out.energy_residual_w[j] = (c.energy_rate_w - c.power_w).abs();
+            out.dq_mm_s[0][j] = c.dq[0];
+            out.dq_mm_s[1][j] = c.dq[1];
+            out.dq_mm_s[2][j] = c.dq[2];
             out.ok[j] = c.ok;
         }
     }
@@ -256,8 +264,8 @@ pub struct StateBlock {
 pub struct ForceBlock {
     /// Q_i (eq. 14), N.
     pub force_n: [[f64; BLOCK]; 3],
-    /// |dE/dt − Σ Q_i q̇_i| (eq. 20), W.
-    pub energy_residual_w: [f64; BLOCK],
+    /// q̇_i (eq. 7), mm/s: what the motor's available force depends on.
+    pub dq_mm_s: [[f64; BLOCK]; 3],
     /// False where the state has no valid pose: [`DeltaModel::evaluate`] says why.
     pub ok: [bool; BLOCK],
 }
@@ -276,7 +284,7 @@ impl Default for ForceBlock {
     fn default() -> Self {
         ForceBlock {
             force_n: [[0.0; BLOCK]; 3],
-            energy_residual_w: [0.0; BLOCK],
+            dq_mm_s: [[0.0; BLOCK]; 3],
             ok: [false; BLOCK],
         }
     }
@@ -453,6 +461,19 @@ mod tests {
                     "λ{i} {lam} vs {}",
                     s.lambda[i]
                 );
+                // The constraint's force on the platform, λ_i·∂Γ_i/∂(x, y, z) from the
+                // solve, against the arm: along it, towards the carriage when positive.
+                let force = Vec3::new(lhs[(3, i)], lhs[(4, i)], lhs[(5, i)]) * lam;
+                let t = m.towers_mm[i];
+                let to_carriage =
+                    Vec3::new(t[0] * 1e-3 - pc[0], t[1] * 1e-3 - pc[1], qs[i] - pc[2]);
+                let along = force.dot(&to_carriage.normalize());
+                assert!(
+                    (along - s.arm_tension_n[i]).abs() < 1e-5 * (1.0 + along.abs()),
+                    "tension {i}: {along} vs {}",
+                    s.arm_tension_n[i]
+                );
+                assert!((force.norm() - along.abs()).abs() < 1e-6 * (1.0 + along.abs()));
             }
         }
     }
@@ -631,9 +652,10 @@ mod tests {
                 assert_eq!(fast.force_n[i][j].to_bits(), s.force_n[i].to_bits());
                 assert_eq!(base.force_n[i][j].to_bits(), s.force_n[i].to_bits());
             }
-            let residual = (s.energy_rate_w - s.power_w).abs();
-            assert_eq!(fast.energy_residual_w[j].to_bits(), residual.to_bits());
-            assert_eq!(base.energy_residual_w[j].to_bits(), residual.to_bits());
+            for i in 0..3 {
+                assert_eq!(fast.dq_mm_s[i][j].to_bits(), s.dq_mm_s[i].to_bits());
+                assert_eq!(base.dq_mm_s[i][j].to_bits(), s.dq_mm_s[i].to_bits());
+            }
         }
         assert!(bad >= 4 * (len / 16), "{bad} invalid lanes");
     }

@@ -70,7 +70,9 @@ mod tests {
         let a = annotations(&sample_report());
         assert_eq!(
             a[&20],
-            ["; delta-gcode: OVER force 31.2/12.0/9.8 N > 30.0 N (tower A, decel, t=2.500 s)"]
+            [
+                "; delta-gcode: OVER force: needs 31.2 N, the motor gives 30.0 N at 120 mm/s (tower A, decel, t=2.500 s)"
+            ]
         );
         assert!(a[&30][0].starts_with(
             "; delta-gcode: UNREACHABLE at X200.000 Y0.000 Z0.000: tower B: arm too short"

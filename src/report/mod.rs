@@ -8,7 +8,7 @@ mod text;
 
 pub use annotations::{annotations, summary_lines};
 pub use github::write_github;
-pub use stats::{MoveStats, NEAR_SINGULAR_RATIO, Problem};
+pub use stats::{MoveStats, NEAR_SINGULAR_RATIO, Problem, RunForces, Worst};
 pub use text::write_text;
 
 use serde::Serialize;
@@ -44,10 +44,15 @@ pub struct Summary {
     pub peak_line: [u64; 3],
     /// Time of each tower's peak, s.
     pub peak_t_s: [f64; 3],
-    /// Moves over the force limit, unreachable, above home or outside the print radius.
+    /// Per tower, the largest share of the force its motor can give that a move asked
+    /// (|Q_i| / available at that carriage speed; above 1 the motor skips steps), and the
+    /// line.
+    pub peak_use: [f64; 3],
+    pub peak_use_line: [u64; 3],
+    /// Moves over the force available, unreachable, above home or outside the print
+    /// radius.
     pub violations: u64,
     pub unreachable: u64,
-    pub max_energy_residual_w: f64,
     pub warnings: u64,
     pub errors: u64,
 }
@@ -94,7 +99,13 @@ impl Serialize for ViolationKind {
 pub struct Violation {
     pub line: u64,
     pub kind: ViolationKind,
+    /// Kind `force`: the force each tower needed at its worst instant (the one closest to,
+    /// or furthest beyond, what its motor gives); other kinds: the move's peak forces. N.
     pub peak_force_n: [f64; 3],
+    /// Kind `force`: the force each motor could give at that instant, at that carriage
+    /// speed, N.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub available_force_n: Option<[f64; 3]>,
     /// 1-based tower (1 = A) of the worst force, or of the problem.
     pub tower: usize,
     pub t_s: f64,
@@ -137,12 +148,15 @@ impl Report {
         let s = &mut self.summary;
         s.moves += 1;
         s.samples += m.samples;
-        s.max_energy_residual_w = s.max_energy_residual_w.max(m.max_energy_residual_w);
         for i in 0..3 {
             if m.peak_force_n[i] > s.peak_force_n[i] {
                 s.peak_force_n[i] = m.peak_force_n[i];
                 s.peak_line[i] = m.line;
                 s.peak_t_s[i] = m.peak_t_s[i];
+            }
+            if m.worst[i].ratio > s.peak_use[i] {
+                s.peak_use[i] = m.worst[i].ratio;
+                s.peak_use_line[i] = m.line;
             }
         }
         if let Some(moves) = &mut self.moves {
@@ -235,16 +249,24 @@ impl Report {
                     "NOT SAMPLED: the move lasts {duration_s:.0} s; only its ends were checked"
                 ),
             ),
-            None if m.peak_n() > self.limit_force_n => (
-                ViolationKind::Force,
-                worst,
-                m.peak_t_s[worst],
-                format!(
-                    "OVER force {} N > {:.1} N",
-                    format_forces(&m.peak_force_n),
-                    self.limit_force_n
-                ),
-            ),
+            None if m.over_force() => {
+                let tower = m.worst_use_tower();
+                let w = &m.worst[tower];
+                return Some(Violation {
+                    line: m.line,
+                    kind: ViolationKind::Force,
+                    peak_force_n: m.worst.map(|w| w.force_n),
+                    available_force_n: Some(m.worst.map(|w| w.available_n)),
+                    tower: tower + 1,
+                    t_s: w.t_s,
+                    phase: w.phase,
+                    message: format!(
+                        "OVER force: needs {:.1} N, the motor gives {:.1} N at {:.0} mm/s",
+                        w.force_n, w.available_n, w.speed_mm_s
+                    ),
+                    command: String::new(),
+                });
+            }
             None => return None,
         };
         let phase = m.peak_phase[worst];
@@ -252,6 +274,7 @@ impl Report {
             line: m.line,
             kind,
             peak_force_n: m.peak_force_n,
+            available_force_n: None,
             tower: tower + 1,
             t_s,
             phase,
@@ -297,15 +320,15 @@ impl Report {
         self.summary.violations > 0
     }
 
-    /// The violations, worst first: problems before forces, then by force / limit.
+    /// The violations, worst first: problems before forces, then by force needed / force
+    /// available.
     pub fn worst_first(&self) -> Vec<&Violation> {
         let mut v: Vec<&Violation> = self.violations.iter().collect();
-        let key = |v: &Violation| {
-            if v.kind == ViolationKind::Force {
-                v.peak_force_n.iter().fold(0.0_f64, |a, b| a.max(*b))
-            } else {
-                f64::INFINITY
-            }
+        let key = |v: &Violation| match v.available_force_n {
+            Some(a) => (0..3)
+                .map(|i| v.peak_force_n[i] / a[i].max(f64::MIN_POSITIVE))
+                .fold(0.0_f64, f64::max),
+            None => f64::INFINITY,
         };
         v.sort_by(|a, b| key(b).total_cmp(&key(a)).then(a.line.cmp(&b.line)));
         v
@@ -333,15 +356,26 @@ pub fn write_json(
 pub(crate) mod tests {
     use super::*;
 
+    /// One sample into a move's statistics, the motors giving 30 N at 120 mm/s.
+    fn sample(m: &mut MoveStats, t: f64, phase: Phase, f: [f64; 3]) {
+        m.add_run(&RunForces {
+            t_s: &[t],
+            phase: &[phase],
+            force_n: [&[f[0]], &[f[1]], &[f[2]]],
+            available_n: [&[30.0]; 3],
+            speed_mm_s: [&[120.0]; 3],
+        });
+    }
+
     /// A report with one move within limits, one over, one unreachable.
     pub(crate) fn sample_report() -> Report {
         let mut r = Report::new("part.gcode", "Kossel", 30.0, true);
         let mut ok = MoveStats::new(10);
-        ok.add(1.0, Phase::Cruise, [10.0, 11.0, 12.0], 1e-9);
+        sample(&mut ok, 1.0, Phase::Cruise, [10.0, 11.0, 12.0]);
         let mut over = MoveStats::new(20);
-        over.add(2.5, Phase::Decel, [31.25, -12.0, 9.8], 2e-9);
+        sample(&mut over, 2.5, Phase::Decel, [31.25, -12.0, 9.8]);
         let mut far = MoveStats::new(30);
-        far.add(3.0, Phase::Accel, [1.0, 1.0, 1.0], 0.0);
+        sample(&mut far, 3.0, Phase::Accel, [1.0, 1.0, 1.0]);
         far.flag(Problem::Unreachable {
             t_s: 3.0,
             tower: Some(1),
@@ -369,8 +403,11 @@ pub(crate) mod tests {
         assert_eq!(r.violations[0].tower, 1);
         assert_eq!(
             r.violations[0].message,
-            "OVER force 31.2/12.0/9.8 N > 30.0 N"
+            "OVER force: needs 31.2 N, the motor gives 30.0 N at 120 mm/s"
         );
+        assert_eq!(r.violations[0].available_force_n, Some([30.0; 3]));
+        assert_eq!(r.summary.peak_use, [31.25 / 30.0, 0.4, 0.4]);
+        assert_eq!(r.summary.peak_use_line, [20, 20, 10]);
         assert_eq!(r.violations[1].kind, ViolationKind::Unreachable);
         assert_eq!(r.violations[1].tower, 2);
         assert!(r.failed());
@@ -402,7 +439,7 @@ pub(crate) mod tests {
             "peak_force_n",
             "violations",
             "unreachable",
-            "max_energy_residual_w",
+            "peak_use",
         ] {
             assert!(v["summary"].get(key).is_some(), "summary.{key}");
         }
@@ -412,6 +449,8 @@ pub(crate) mod tests {
         assert_eq!(viol["tower"], 1);
         assert_eq!(viol["phase"], "decel");
         assert_eq!(viol["t_s"], 2.5);
+        assert_eq!(viol["available_force_n"][0], 30.0);
+        assert!(v["violations"][1].get("available_force_n").is_none());
         assert_eq!(v["moves"].as_array().map(Vec::len), Some(3));
         let mut two = Vec::new();
         write_json(&mut two, &[r.clone(), r]).unwrap();

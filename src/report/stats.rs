@@ -68,8 +68,9 @@ pub struct MoveStats {
     /// When each tower's peak happened, s.
     pub peak_t_s: [f64; 3],
     pub peak_phase: [Phase; 3],
-    /// Largest |dE/dt − Σ Q_i q̇_i| over the move (eq. 20), W.
-    pub max_energy_residual_w: f64,
+    /// Per tower, the instant its motor was asked the largest share of the force it can
+    /// give at that carriage speed.
+    pub worst: [Worst; 3],
     /// The most severe geometric problem found, if any.
     pub problem: Option<Problem>,
     /// Near a singular pose: the tower (0 = A) whose carriage moves fastest relative to the
@@ -78,6 +79,45 @@ pub struct MoveStats {
     /// The line's G92 offset: positions are reported as the file writes them, machine
     /// position − offset, mm.
     pub offset_mm: [f64; 3],
+}
+
+/// The instant a tower's motor was asked the largest share of what it can give.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Worst {
+    /// |Q_i| / available force: above 1, the motor skips steps.
+    pub ratio: f64,
+    /// |Q_i| then, N.
+    pub force_n: f64,
+    /// The force the motor can give at that carriage speed, N.
+    pub available_n: f64,
+    /// |q̇_i| then, mm/s.
+    pub speed_mm_s: f64,
+    pub t_s: f64,
+    pub phase: Phase,
+}
+
+impl Default for Worst {
+    fn default() -> Self {
+        Worst {
+            ratio: 0.0,
+            force_n: 0.0,
+            available_n: 0.0,
+            speed_mm_s: 0.0,
+            t_s: 0.0,
+            phase: Phase::Cruise,
+        }
+    }
+}
+
+/// The evaluated samples of a run, as the statistics take them: per tower the force asked
+/// (N), the force available at the carriage's speed (N) and that speed (mm/s).
+#[derive(Clone, Copy)]
+pub struct RunForces<'a> {
+    pub t_s: &'a [f64],
+    pub phase: &'a [Phase],
+    pub force_n: [&'a [f64]; 3],
+    pub available_n: [&'a [f64]; 3],
+    pub speed_mm_s: [&'a [f64]; 3],
 }
 
 /// A carriage moving this many times faster than the nozzle marks a near-singular pose (the
@@ -92,59 +132,52 @@ impl MoveStats {
             peak_force_n: [0.0; 3],
             peak_t_s: [0.0; 3],
             peak_phase: [Phase::Cruise; 3],
-            max_energy_residual_w: 0.0,
+            worst: [Worst::default(); 3],
             problem: None,
             near_singular: None,
             offset_mm: [0.0; 3],
         }
     }
 
-    /// Takes one evaluated sample into the peaks.
-    pub fn add(&mut self, t_s: f64, phase: Phase, force_n: [f64; 3], energy_residual_w: f64) {
-        let f = force_n;
-        self.add_run(
-            &[t_s],
-            &[phase],
-            [&[f[0]], &[f[1]], &[f[2]]],
-            &[energy_residual_w],
-        );
-    }
-
     /// Takes a run of evaluated samples, in time order, into the peaks: the same as adding
     /// them one by one.
-    pub fn add_run(
-        &mut self,
-        t_s: &[f64],
-        phase: &[Phase],
-        force_n: [&[f64]; 3],
-        energy_residual_w: &[f64],
-    ) {
-        self.samples += t_s.len() as u64;
-        // One pass, branch-free, the three towers interleaved: the peak and the index of
-        // the first sample that reached it, as a scan with a strict `>` keeps.
-        let mut peak = self.peak_force_n;
-        let mut at = [usize::MAX; 3];
-        for (j, ((f0, f1), f2)) in force_n[0]
-            .iter()
-            .zip(force_n[1])
-            .zip(force_n[2])
-            .enumerate()
-        {
-            for (i, f) in [f0, f1, f2].into_iter().enumerate() {
-                let up = f.abs() > peak[i];
-                peak[i] = if up { f.abs() } else { peak[i] };
-                at[i] = if up { j } else { at[i] };
-            }
-        }
+    pub fn add_run(&mut self, run: &RunForces) {
+        self.samples += run.t_s.len() as u64;
         for i in 0..3 {
-            if let Some((&t, &ph)) = t_s.get(at[i]).zip(phase.get(at[i])) {
-                self.peak_force_n[i] = peak[i];
+            // One pass, branch-free: the peak force and the largest share of the available
+            // force, each with the index of the first sample that reached it, as a scan
+            // with a strict `>` keeps.
+            let (mut peak, mut peak_at) = (self.peak_force_n[i], usize::MAX);
+            let (mut ratio, mut ratio_at) = (self.worst[i].ratio, usize::MAX);
+            let (f, avail) = (run.force_n[i], run.available_n[i]);
+            for (j, (&q, &a)) in f.iter().zip(avail).enumerate() {
+                let q = q.abs();
+                let up = q > peak;
+                peak = if up { q } else { peak };
+                peak_at = if up { j } else { peak_at };
+                // No force available (a motor beyond its top speed) and some asked: the
+                // largest finite ratio, a violation.
+                let r = q / a.max(f64::MIN_POSITIVE);
+                let up = r > ratio;
+                ratio = if up { r } else { ratio };
+                ratio_at = if up { j } else { ratio_at };
+            }
+            if let Some((&t, &ph)) = run.t_s.get(peak_at).zip(run.phase.get(peak_at)) {
+                self.peak_force_n[i] = peak;
                 self.peak_t_s[i] = t;
                 self.peak_phase[i] = ph;
             }
+            if let Some((&t, &ph)) = run.t_s.get(ratio_at).zip(run.phase.get(ratio_at)) {
+                self.worst[i] = Worst {
+                    ratio,
+                    force_n: f[ratio_at].abs(),
+                    available_n: avail[ratio_at],
+                    speed_mm_s: run.speed_mm_s[i][ratio_at].abs(),
+                    t_s: t,
+                    phase: ph,
+                };
+            }
         }
-        let residual = energy_residual_w.iter().fold(0.0, |m: f64, &r| m.max(r));
-        self.max_energy_residual_w = self.max_energy_residual_w.max(residual);
     }
 
     /// Takes in the statistics of another part of the same move (a later one): the peaks
@@ -158,8 +191,10 @@ impl MoveStats {
                 self.peak_t_s[i] = later.peak_t_s[i];
                 self.peak_phase[i] = later.peak_phase[i];
             }
+            if later.worst[i].ratio > self.worst[i].ratio {
+                self.worst[i] = later.worst[i];
+            }
         }
-        self.max_energy_residual_w = self.max_energy_residual_w.max(later.max_energy_residual_w);
         if let Some(p) = &later.problem {
             self.flag(p.clone());
         }
@@ -183,6 +218,23 @@ impl MoveStats {
         }
     }
 
+    /// The tower (0-based) whose motor was asked the largest share of what it can give.
+    pub fn worst_use_tower(&self) -> usize {
+        let r = self.worst.map(|w| w.ratio);
+        if r[0] >= r[1] && r[0] >= r[2] {
+            0
+        } else if r[1] >= r[2] {
+            1
+        } else {
+            2
+        }
+    }
+
+    /// Whether some motor was asked more than it can give.
+    pub fn over_force(&self) -> bool {
+        self.worst.iter().any(|w| w.ratio > 1.0)
+    }
+
     /// The tower (0-based) with the largest peak.
     pub fn worst_tower(&self) -> usize {
         let p = self.peak_force_n;
@@ -204,18 +256,50 @@ impl MoveStats {
 mod tests {
     use super::*;
 
+    /// One sample's run.
+    fn one(s: &mut MoveStats, t: f64, phase: Phase, f: [f64; 3], available: [f64; 3]) {
+        s.add_run(&RunForces {
+            t_s: &[t],
+            phase: &[phase],
+            force_n: [&[f[0]], &[f[1]], &[f[2]]],
+            available_n: [&[available[0]], &[available[1]], &[available[2]]],
+            speed_mm_s: [&[10.0 * t], &[20.0 * t], &[-30.0 * t]],
+        });
+    }
+
     #[test]
     fn peaks_keep_time_and_phase_of_the_largest_magnitude() {
         let mut s = MoveStats::new(7);
-        s.add(0.0, Phase::Accel, [1.0, -5.0, 2.0], 1e-9);
-        s.add(0.001, Phase::Cruise, [-3.0, 4.0, 2.5], 3e-9);
-        s.add(0.002, Phase::Decel, [2.0, 1.0, -2.0], 0.0);
+        one(&mut s, 0.0, Phase::Accel, [1.0, -5.0, 2.0], [10.0; 3]);
+        one(
+            &mut s,
+            0.001,
+            Phase::Cruise,
+            [-3.0, 4.0, 2.5],
+            [10.0, 4.0, 1.0],
+        );
+        one(
+            &mut s,
+            0.002,
+            Phase::Decel,
+            [2.0, 1.0, -2.0],
+            [10.0, 0.0, 10.0],
+        );
         assert_eq!(s.samples, 3);
         assert_eq!(s.peak_force_n, [3.0, 5.0, 2.5]);
         assert_eq!(s.peak_t_s, [0.001, 0.0, 0.001]);
         assert_eq!(s.peak_phase, [Phase::Cruise, Phase::Accel, Phase::Cruise]);
         assert_eq!(s.worst_tower(), 1);
-        assert_eq!(s.max_energy_residual_w, 3e-9);
+        // Shares: A 0.3 at 0.001; B 1 at 0.001, then 1 N of none at 0.002 (a motor past its
+        // top speed); C 2.5 at 0.001.
+        assert_eq!(s.worst[0].ratio, 0.3);
+        assert_eq!(s.worst[1].available_n, 0.0);
+        assert_eq!((s.worst[1].force_n, s.worst[1].t_s), (1.0, 0.002));
+        assert!(s.worst[1].ratio > 1e300);
+        assert_eq!(s.worst[2].ratio, 2.5);
+        assert_eq!(s.worst[2].speed_mm_s, 0.03);
+        assert_eq!(s.worst_use_tower(), 1);
+        assert!(s.over_force());
     }
 
     #[test]
@@ -231,9 +315,17 @@ mod tests {
             let mut f: [Vec<f64>; 3] =
                 [(); 3].map(|()| (0..n).map(|_| rng.range(-4.0, 4.0).round()).collect());
             f[2][n / 2] = f64::NAN;
-            let res: Vec<f64> = (0..n).map(|_| rng.range(0.0, 1e-9)).collect();
+            let a: [Vec<f64>; 3] =
+                [(); 3].map(|()| (0..n).map(|_| rng.range(1.0, 5.0).round()).collect());
+            let v: [Vec<f64>; 3] = [(); 3].map(|()| (0..n).map(|_| rng.range(-9.0, 9.0)).collect());
             let mut run = MoveStats::new(1);
-            run.add(0.0, Phase::Accel, [2.0, 0.5, 0.0], 0.0);
+            one(
+                &mut run,
+                0.0,
+                Phase::Accel,
+                [2.0, 0.5, 0.0],
+                [4.0, 4.0, 4.0],
+            );
             let mut scan = run.clone();
             for k in 0..n {
                 scan.samples += 1;
@@ -243,10 +335,26 @@ mod tests {
                         scan.peak_t_s[i] = t[k];
                         scan.peak_phase[i] = phase[k];
                     }
+                    let r = f[i][k].abs() / a[i][k];
+                    if r > scan.worst[i].ratio {
+                        scan.worst[i] = Worst {
+                            ratio: r,
+                            force_n: f[i][k].abs(),
+                            available_n: a[i][k],
+                            speed_mm_s: v[i][k].abs(),
+                            t_s: t[k],
+                            phase: phase[k],
+                        };
+                    }
                 }
-                scan.max_energy_residual_w = scan.max_energy_residual_w.max(res[k]);
             }
-            run.add_run(&t, &phase, [&f[0], &f[1], &f[2]], &res);
+            run.add_run(&RunForces {
+                t_s: &t,
+                phase: &phase,
+                force_n: [&f[0], &f[1], &f[2]],
+                available_n: [&a[0], &a[1], &a[2]],
+                speed_mm_s: [&v[0], &v[1], &v[2]],
+            });
             assert_eq!(run, scan, "n = {n}");
         }
     }

@@ -2,7 +2,7 @@
 
 use std::io::{self, Write};
 
-use super::{Report, ViolationKind, format_forces};
+use super::{Report, format_forces};
 use crate::delta::TOWER_NAMES;
 
 /// How many of the worst moves the text report lists.
@@ -46,10 +46,10 @@ pub fn write_text(out: &mut (impl Write + ?Sized), report: &Report) -> io::Resul
             "line", "force A/B/C (N)", "margin", "phase", "t (s)"
         )?;
         for v in worst.iter().take(WORST_SHOWN) {
-            let (margin, what) = if v.kind == ViolationKind::Force {
-                let peak = v.peak_force_n[v.tower - 1];
+            let (margin, what) = if let Some(available) = v.available_force_n {
+                let t = v.tower - 1;
                 (
-                    format!("{:+.1} N", limit - peak),
+                    format!("{:+.1} N", available[t] - v.peak_force_n[t]),
                     format!(
                         "tower {}: {}",
                         TOWER_NAMES[v.tower - 1],
@@ -89,19 +89,23 @@ pub fn write_text(out: &mut (impl Write + ?Sized), report: &Report) -> io::Resul
     )?;
     writeln!(
         out,
-        "  peak force    A {:.1} N (line {}), B {:.1} N (line {}), C {:.1} N (line {}): {:.0}% of the limit",
+        "  peak force    A {:.1} N (line {}), B {:.1} N (line {}), C {:.1} N (line {})",
         s.peak_force_n[0],
         s.peak_line[0],
         s.peak_force_n[1],
         s.peak_line[1],
         s.peak_force_n[2],
         s.peak_line[2],
-        100.0 * s.peak_force_n.iter().fold(0.0_f64, |a, b| a.max(*b)) / limit
     )?;
+    let t = (0..3)
+        .max_by(|&a, &b| s.peak_use[a].total_cmp(&s.peak_use[b]))
+        .unwrap_or(0);
     writeln!(
         out,
-        "  energy check  largest |dE/dt - sum Q*dq| = {:.2e} W (eq. 20)",
-        s.max_energy_residual_w
+        "  motor use     at most {:.0}% of the force a motor can give at its speed (tower {}, line {})",
+        100.0 * s.peak_use[t],
+        TOWER_NAMES[t],
+        s.peak_use_line[t]
     )?;
     if s.warnings + s.errors > 0 {
         writeln!(
