@@ -161,9 +161,9 @@ impl Observer for Verdict<'_> {
     fn observe(&self, model: &DeltaModel, stats: &mut MoveStats, run: &Evaluated) {
         let (lanes, fo) = (run.lanes.clone(), run.forces);
         let mut available = [[0.0; BLOCK]; 3];
-        for i in 0..3 {
+        for (avail, dq) in available.iter_mut().zip(&fo.dq_mm_s) {
             for j in lanes.clone() {
-                available[i][j] = self.motors.available_force_n(fo.dq_mm_s[i][j].abs());
+                avail[j] = self.motors.available_force_n(dq[j].abs());
             }
         }
         let forces = |j0: usize, j1: usize| RunForces {
