@@ -387,7 +387,9 @@ mod tests {
         let (machine, gcode) = setup();
         let moves = plan(&machine, &gcode);
         let observer = (
-            TraceRows,
+            TraceRows {
+                motors: &machine.motors,
+            },
             Window {
                 from_s: 0.05,
                 to_s: 1.5,

@@ -4,6 +4,7 @@ use serde::Serialize;
 
 use super::observe::{Evaluated, Observer};
 use crate::delta::DeltaModel;
+use crate::machine::Motors;
 
 /// One row of the trace CSV: the nozzle's actual state at one sample, the carriages'
 /// (eq. 6-8), the commanded carriage heights, the forces (eq. 14) and both sides of the
@@ -37,6 +38,14 @@ pub struct TraceRow {
     pub f1_n: f64,
     pub f2_n: f64,
     pub f3_n: f64,
+    /// The force each motor can give at its carriage's speed.
+    pub f1_avail_n: f64,
+    pub f2_avail_n: f64,
+    pub f3_avail_n: f64,
+    /// Each parallelogram's tension (both rods), positive when it pulls the platform.
+    pub t1_n: f64,
+    pub t2_n: f64,
+    pub t3_n: f64,
     pub power_w: f64,
     pub energy_rate_w: f64,
 }
@@ -55,9 +64,12 @@ pub fn trace_header() -> String {
 
 /// The trace rows of each move, as CSV text (no header). A pose the model cannot take has
 /// no row: the statistics flag it.
-pub struct TraceRows;
+pub struct TraceRows<'m> {
+    /// The motors, for the force available at each carriage's speed.
+    pub motors: &'m Motors,
+}
 
-impl Observer for TraceRows {
+impl Observer for TraceRows<'_> {
     type PerMove = Vec<u8>;
 
     fn start(&self, _: u64) -> Vec<u8> {
@@ -77,6 +89,8 @@ impl Observer for TraceRows {
             // one was in reach) has no heights: NaN would be no number, so the actual ones.
             let q_cmd = model.inverse(run.cmd_pos(j)).unwrap_or(st.q_mm);
             let (q, dq, ddq, f) = (st.q_mm, st.dq_mm_s, st.ddq_mm_s2, st.force_n);
+            let avail = dq.map(|v| self.motors.available_force_n(v.abs()));
+            let tension = st.arm_tension_n;
             let _ = w.serialize(TraceRow {
                 t_s: run.t_s[j],
                 line: run.line,
@@ -104,6 +118,12 @@ impl Observer for TraceRows {
                 f1_n: f[0],
                 f2_n: f[1],
                 f3_n: f[2],
+                f1_avail_n: avail[0],
+                f2_avail_n: avail[1],
+                f3_avail_n: avail[2],
+                t1_n: tension[0],
+                t2_n: tension[1],
+                t3_n: tension[2],
                 power_w: st.power_w,
                 energy_rate_w: st.energy_rate_w,
             });
@@ -125,8 +145,9 @@ mod tests {
     fn the_header_names_every_field_in_order() {
         let h = trace_header();
         assert!(h.starts_with("t_s,line,x_mm,y_mm,z_mm,vx_mm_s"), "{h}");
-        assert!(h.ends_with("f3_n,power_w,energy_rate_w\n"), "{h}");
-        assert_eq!(h.split(',').count(), 28);
+        assert!(h.ends_with("t3_n,power_w,energy_rate_w\n"), "{h}");
+        assert_eq!(h.split(',').count(), 34);
+        assert!(h.contains(",f1_n,f2_n,f3_n,f1_avail_n,f2_avail_n,f3_avail_n,t1_n,t2_n,t3_n,"));
         assert!(
             h.contains(",q1_mm,q2_mm,q3_mm,q1_cmd_mm,q2_cmd_mm,q3_cmd_mm,"),
             "{h}"

@@ -32,7 +32,9 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         run_pipeline(
             input,
             &machine,
-            TraceRows,
+            TraceRows {
+                motors: &machine.motors,
+            },
             |r| {
                 if failure.is_ok() {
                     failure = w.write_all(&r.observed);
