@@ -1,6 +1,10 @@
-//! The per-line parser, written with nom; numbers by an exact fast path with fast-float2
-//! behind it (see `number`). It borrows the line and allocates nothing: words and
-//! diagnostics live in fixed arrays, extended parameters are read on demand.
+//! The per-line parser. Its grammar is nom combinators over the line's bytes, in
+//! `parse/grammar.rs`; this file holds the parsed line's types and [`parse_line`], which
+//! strings the grammar's parsers together and turns what they return into the command,
+//! words, parameters and diagnostics (duplicates, exponents, capacities, severities).
+//! Numbers are read by an exact fast path with fast-float2 behind it. It borrows the line
+//! and allocates nothing: words and diagnostics live in fixed arrays, extended parameters
+//! are read again on demand.
 //!
 //! Grammar of one line (case-insensitive letters; columns are 1-based byte offsets):
 //! ```text
@@ -16,12 +20,12 @@
 //! of the line up to `;` as free text, as Klipper reads them. A `*` followed by digits ends
 //! the command part: the checksum, XOR of every byte before the `*`.
 
-use nom::{
-    IResult,
-    bytes::complete::{take_while, take_while1},
-};
+mod grammar;
+
+use nom::combinator::iterator;
 
 use super::Severity;
+use grammar::{Head, Token, Value, number};
 
 /// Most words kept per classic line; more is a warning.
 pub const MAX_WORDS: usize = 16;
@@ -252,85 +256,6 @@ impl<'a> ParsedLine<'a> {
     }
 }
 
-type Res<'a, T> = IResult<&'a [u8], T>;
-
-fn is_space(c: u8) -> bool {
-    c == b' ' || c == b'\t'
-}
-
-fn spaces(i: &[u8]) -> Res<'_, &[u8]> {
-    take_while(is_space)(i)
-}
-
-fn name(i: &[u8]) -> Res<'_, &[u8]> {
-    take_while1(|c: u8| c.is_ascii_alphanumeric() || c == b'_')(i)
-}
-
-/// Token of an extended command: up to whitespace, `=` or `;`.
-fn key(i: &[u8]) -> Res<'_, &[u8]> {
-    take_while1(|c: u8| !is_space(c) && c != b'=' && c != b';')(i)
-}
-
-fn bare_value(i: &[u8]) -> Res<'_, &[u8]> {
-    take_while(|c: u8| !is_space(c) && c != b';')(i)
-}
-
-/// Powers of ten exactly representable in an f64.
-const POW10: [f64; 23] = [
-    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
-    1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
-];
-
-/// A number: `[+-] digits [. digits]` (at least one digit), recognised and read in one
-/// pass (nom's parser shape: rest of the input, then the value). The value is `None`
-/// without a digit or beyond [`MAX_NUMBER`].
-///
-/// Up to 15 digits the mantissa and the power of ten are exact in an f64, so one division
-/// gives the correctly rounded value (Clinger's fast path, the one fast-float2 takes
-/// first too, without its general set-up); longer numbers go to fast-float2.
-fn number(i: &[u8]) -> (&[u8], Option<f64>) {
-    let (neg, mut k) = match i.first() {
-        Some(b'-') => (true, 1),
-        Some(b'+') => (false, 1),
-        _ => (false, 0),
-    };
-    let mut m: u64 = 0;
-    let mut digits = 0usize;
-    while let Some(&c) = i.get(k)
-        && c.is_ascii_digit()
-    {
-        m = m.wrapping_mul(10).wrapping_add(u64::from(c - b'0'));
-        digits += 1;
-        k += 1;
-    }
-    let mut frac = 0usize;
-    if i.get(k) == Some(&b'.') {
-        k += 1;
-        while let Some(&c) = i.get(k)
-            && c.is_ascii_digit()
-        {
-            m = m.wrapping_mul(10).wrapping_add(u64::from(c - b'0'));
-            digits += 1;
-            frac += 1;
-            k += 1;
-        }
-    }
-    let (text, rest) = i.split_at(k);
-    if digits == 0 {
-        return (rest, None);
-    }
-    let v = if digits <= 15 {
-        let v = m as f64 / POW10[frac];
-        if neg { -v } else { v }
-    } else {
-        match fast_float2::parse::<f64, _>(text) {
-            Ok(v) => v,
-            Err(_) => return (rest, None),
-        }
-    };
-    (rest, (v.abs() <= MAX_NUMBER).then_some(v))
-}
-
 /// Commands whose argument is free text.
 fn takes_text(letter: u8, number: u32) -> bool {
     letter == b'M' && matches!(number, 23 | 28 | 30 | 32 | 117 | 118 | 928)
@@ -356,6 +281,11 @@ pub fn strip_terminator(line: &[u8]) -> &[u8] {
     l.strip_suffix(b"\r").unwrap_or(l)
 }
 
+/// 1-based column of `rest`, a sub-slice of `line`.
+fn column(line: &[u8], rest: &[u8]) -> u32 {
+    (rest.as_ptr() as usize - line.as_ptr() as usize + 1) as u32
+}
+
 /// Parses one line (with or without its terminator).
 pub fn parse_line(line: &[u8]) -> ParsedLine<'_> {
     let line = strip_terminator(line);
@@ -370,224 +300,115 @@ pub fn parse_line(line: &[u8]) -> ParsedLine<'_> {
         checksum: None,
         diags: Fixed::new(NO_DIAG),
     };
-    let col = |rest: &[u8]| column(line, rest);
-
-    // The code part ends at the first `;`; a `*digits` at its end is the checksum.
-    let semi = line.iter().position(|&c| c == b';');
-    let mut code = &line[..semi.unwrap_or(line.len())];
-    if let Some(comment_start) = semi {
-        p.comment = Some(&line[comment_start + 1..]);
-    }
-    if let Some(star) = code.iter().rposition(|&c| c == b'*') {
-        let after = &code[star + 1..];
-        let digits_end = after
-            .iter()
-            .position(|c| !c.is_ascii_digit())
-            .unwrap_or(after.len());
-        let tail_blank = after[digits_end..].iter().all(|&c| is_space(c));
-        if digits_end > 0 && tail_blank && digits_end <= 9 {
-            let written = after[..digits_end]
-                .iter()
-                .fold(0u32, |a, &d| a * 10 + u32::from(d - b'0'));
-            let computed = line[..star].iter().fold(0u8, |a, &b| a ^ b);
-            p.checksum = Some(written);
-            if u32::from(computed) != written {
-                p.diag(
-                    (star + 1) as u32,
-                    Severity::Warning,
-                    DiagKind::Checksum { computed, written },
-                );
-            }
-            code = &line[..star];
-        }
-    }
-
-    let (mut rest, _) = spaces(code).unwrap_or((code, b""));
-    // N line number.
-    if let [b'N' | b'n', d, ..] = rest
-        && d.is_ascii_digit()
+    let (mut code, comment, last_star) = grammar::code_and_comment(line);
+    p.comment = comment;
+    if let Some(star) = last_star
+        && let Ok((_, written)) = grammar::checksum(&code[star..])
     {
-        let (r, digits) =
-            take_while1::<_, _, nom::error::Error<&[u8]>>(|c: u8| c.is_ascii_digit())(&rest[1..])
-                .unwrap_or((&rest[1..], b""));
-        p.line_number = Some(digits.iter().fold(0u64, |a, &d| {
-            a.wrapping_mul(10).wrapping_add(u64::from(d - b'0'))
-        }));
-        rest = spaces(r).map(|(r, _)| r).unwrap_or(r);
+        let computed = line[..star].iter().fold(0u8, |a, &b| a ^ b);
+        p.checksum = Some(written);
+        if u32::from(computed) != written {
+            let kind = DiagKind::Checksum { computed, written };
+            p.diag((star + 1) as u32, Severity::Warning, kind);
+        }
+        code = &code[..star];
     }
-
-    // The command.
-    let start_col = col(rest);
-    match rest {
-        [c, d, ..] if c.is_ascii_alphabetic() && (d.is_ascii_alphabetic() || *d == b'_') => {
-            extended(&mut p, line, rest);
-            return p;
-        }
-        [b'_', ..] => {
-            extended(&mut p, line, rest);
-            return p;
-        }
-        [c, d, ..] if c.is_ascii_alphabetic() && d.is_ascii_digit() => {
-            let (r, digits) =
-                take_while1::<_, _, nom::error::Error<&[u8]>>(|c: u8| c.is_ascii_digit())(
-                    &rest[1..],
-                )
-                .unwrap_or((&rest[1..], b""));
-            let (r, subcode) = match r {
-                [b'.', d, ..] if d.is_ascii_digit() => {
-                    let (r2, sub) =
-                        take_while1::<_, _, nom::error::Error<&[u8]>>(|c: u8| c.is_ascii_digit())(
-                            &r[1..],
-                        )
-                        .unwrap_or((&r[1..], b""));
-                    (r2, Some(small_int(sub)))
-                }
-                _ => (r, None),
+    let (rest, line_number) = grammar::line_start(code);
+    p.line_number = line_number;
+    match grammar::command(rest) {
+        Ok((args, Head::Extended(name))) => {
+            p.command = Command::Extended {
+                name,
+                column: column(line, name),
             };
-            let letter = c.to_ascii_uppercase();
-            let number = small_int(digits);
+            p.args = args;
+            for arg in iterator(args, grammar::argument) {
+                if let Err((at, kind)) = arg {
+                    p.diag(column(line, at), Severity::Warning, kind);
+                }
+            }
+        }
+        Ok((
+            args,
+            Head::Code {
+                letter,
+                number,
+                subcode,
+            },
+        )) => {
             p.command = Command::Code {
                 letter,
                 number,
                 subcode,
-                column: start_col,
+                column: column(line, rest),
             };
             if subcode.is_none() && takes_text(letter, number) {
-                let t = r.strip_prefix(b" ").unwrap_or(r);
-                p.text = Some(t.trim_ascii_end());
-                return p;
+                p.text = Some(grammar::free_text(args));
+            } else {
+                classic_words(&mut p, args);
             }
-            rest = r;
         }
-        _ => {}
+        Err(_) => classic_words(&mut p, rest),
     }
-    classic_words(&mut p, line, rest);
     p
 }
 
-/// 1-based column of `rest`, a sub-slice of `line`.
-fn column(line: &[u8], rest: &[u8]) -> u32 {
-    (rest.as_ptr() as usize - line.as_ptr() as usize + 1) as u32
-}
-
-/// Digits to a number, saturating (command numbers are small).
-fn small_int(digits: &[u8]) -> u32 {
-    digits.iter().fold(0u32, |a, &d| {
-        a.saturating_mul(10).saturating_add(u32::from(d - b'0'))
-    })
-}
-
-/// Words of a classic command, `( )` comments in between.
-fn classic_words<'a>(p: &mut ParsedLine<'a>, line: &'a [u8], mut rest: &'a [u8]) {
-    let col = |rest: &[u8]| column(line, rest);
-    let motion = is_motion(&p.command);
+/// The words of a classic command, `( )` comments in between, with their diagnostics.
+#[inline(always)]
+fn classic_words<'a>(p: &mut ParsedLine<'a>, args: &'a [u8]) {
+    let line = p.line;
+    let severity = if is_motion(&p.command) {
+        Severity::Error
+    } else {
+        Severity::Warning
+    };
     let mut seen = 0u32; // bit per letter
-    let mut after_number = false; // the previous token was a number, no space since
-    loop {
-        let (r, sp) = spaces(rest).unwrap_or((rest, b""));
-        if !sp.is_empty() {
-            after_number = false;
-        }
+    let mut after_number = false; // the previous token was a number, no blank since
+    let mut rest = args;
+    while let Ok((r, (blank, (at, token)))) = grammar::blank_token(rest) {
         rest = r;
-        let Some(&c) = rest.first() else { return };
-        if c == b'(' {
-            let close = rest.iter().position(|&b| b == b')');
-            let inside = &rest[1..close.unwrap_or(rest.len())];
-            if p.comment.is_none() {
-                p.comment = Some(inside);
-            }
-            if close.is_none() {
-                p.diag(col(rest), Severity::Warning, DiagKind::UnclosedParen);
-                return;
-            }
-            rest = &rest[inside.len() + 2..];
-            after_number = false;
-            continue;
-        }
-        if !c.is_ascii_alphabetic() {
-            p.diag(col(rest), Severity::Warning, DiagKind::UnexpectedChar(c));
-            rest = &rest[1..];
-            after_number = false;
-            continue;
-        }
-        let letter = c.to_ascii_uppercase();
-        let letter_col = col(rest);
-        if letter == b'E' && after_number {
-            p.diag(letter_col, Severity::Warning, DiagKind::ExponentReadAsE);
-        }
-        let (r, _) = spaces(&rest[1..]).unwrap_or((&rest[1..], b""));
-        let mut value = None;
-        after_number = false;
-        rest = if matches!(r.first(), Some(b'0'..=b'9' | b'+' | b'-' | b'.')) {
-            let value_col = col(r);
-            let (r2, num) = number(r);
-            // A number ends at whitespace, a letter, `(` or the end.
-            let ends_well = matches!(r2.first(), None | Some(b' ' | b'\t' | b'('))
-                || r2.first().is_some_and(u8::is_ascii_alphabetic);
-            match num {
-                Some(v) if ends_well => {
-                    value = Some(v);
-                    after_number = true;
-                    r2
+        let col = column(line, at);
+        after_number &= !blank;
+        match token {
+            Token::Comment { inside, closed } => {
+                p.comment.get_or_insert(inside);
+                if !closed {
+                    p.diag(col, Severity::Warning, DiagKind::UnclosedParen);
+                    return;
                 }
-                _ => {
-                    let sev = if motion {
-                        Severity::Error
-                    } else {
-                        Severity::Warning
-                    };
-                    // Digits that end well but give no value: too large.
-                    let text = &r[..r.len() - r2.len()];
-                    let kind = if ends_well && text.iter().any(u8::is_ascii_digit) {
-                        DiagKind::NumberOutOfRange
-                    } else {
-                        DiagKind::MalformedNumber
-                    };
-                    p.diag(value_col, sev, kind);
-                    // Skip the bad token.
-                    let n = r2.iter().position(|&b| is_space(b)).unwrap_or(r2.len());
-                    &r2[n..]
+                after_number = false;
+            }
+            Token::Unexpected(c) => {
+                p.diag(col, Severity::Warning, DiagKind::UnexpectedChar(c));
+                after_number = false;
+            }
+            Token::Word { letter, value } => {
+                if after_number && letter == b'E' {
+                    p.diag(col, Severity::Warning, DiagKind::ExponentReadAsE);
+                }
+                after_number = matches!(value, Value::Number(_));
+                let value = match value {
+                    Value::None => None,
+                    Value::Number(v) => Some(v),
+                    Value::Bad { text, kind } => {
+                        p.diag(column(line, text), severity, kind);
+                        None
+                    }
+                };
+                let bit = 1u32 << (letter - b'A');
+                if seen & bit != 0 {
+                    p.diag(col, Severity::Warning, DiagKind::DuplicateWord(letter));
+                }
+                seen |= bit;
+                if !p.words.push(Word {
+                    letter,
+                    value,
+                    column: col,
+                }) {
+                    p.diag(col, Severity::Warning, DiagKind::TooManyWords);
+                    return;
                 }
             }
-        } else {
-            r
-        };
-        let bit = 1u32 << (letter - b'A');
-        if seen & bit != 0 {
-            p.diag(
-                letter_col,
-                Severity::Warning,
-                DiagKind::DuplicateWord(letter),
-            );
-        }
-        seen |= bit;
-        if !p.words.push(Word {
-            letter,
-            value,
-            column: letter_col,
-        }) {
-            p.diag(letter_col, Severity::Warning, DiagKind::TooManyWords);
-            return;
-        }
-    }
-}
-
-/// A Klipper extended command: name, then `KEY=VALUE` parameters (checked here, stored
-/// as text and read again by [`ParsedLine::params`]).
-fn extended<'a>(p: &mut ParsedLine<'a>, line: &'a [u8], rest: &'a [u8]) {
-    let Ok((rest, n)) = name(rest) else {
-        return;
-    };
-    p.command = Command::Extended {
-        name: n,
-        column: column(line, n),
-    };
-    p.args = rest;
-    let mut rest = rest;
-    while let Some((r, item)) = next_param(line, rest) {
-        rest = r;
-        if let Err((col, kind)) = item {
-            p.diag(col, Severity::Warning, kind);
         }
     }
 }
@@ -604,54 +425,17 @@ impl<'a> Iterator for Params<'a> {
 
     fn next(&mut self) -> Option<Param<'a>> {
         loop {
-            let (rest, item) = next_param(self.line, self.rest)?;
+            let (rest, arg) = grammar::argument(self.rest).ok()?;
             self.rest = rest;
-            if let Ok(p) = item {
-                return Some(p);
+            if let Ok((key, value)) = arg {
+                return Some(Param {
+                    key,
+                    value,
+                    column: column(self.line, key),
+                });
             }
         }
     }
-}
-
-type ParamItem<'a> = Result<Param<'a>, (u32, DiagKind)>;
-
-/// The next `KEY=VALUE` of `rest` (a sub-slice of `line`), or the problem at its place;
-/// `None` at the end.
-fn next_param<'a>(line: &'a [u8], rest: &'a [u8]) -> Option<(&'a [u8], ParamItem<'a>)> {
-    let rest = spaces(rest).map(|(r, _)| r).unwrap_or(rest);
-    if rest.is_empty() {
-        return None;
-    }
-    let key_col = column(line, rest);
-    let Ok((r, k)) = key(rest) else {
-        // Only `=` can start here.
-        let r = bare_value(rest).map(|(r, _)| r).unwrap_or(&rest[1..]);
-        return Some((r, Err((key_col, DiagKind::ExpectedKeyValue))));
-    };
-    let Some(r) = r.strip_prefix(b"=") else {
-        return Some((r, Err((key_col, DiagKind::ExpectedKeyValue))));
-    };
-    let (r, value) = if let [quote @ (b'"' | b'\''), q @ ..] = r {
-        match q.iter().position(|c| c == quote) {
-            Some(end) => (&q[end + 1..], &q[..end]),
-            None => {
-                return Some((
-                    &q[q.len()..],
-                    Err((column(line, r), DiagKind::UnclosedQuote)),
-                ));
-            }
-        }
-    } else {
-        bare_value(r).unwrap_or((r, b""))
-    };
-    Some((
-        r,
-        Ok(Param {
-            key: k,
-            value,
-            column: key_col,
-        }),
-    ))
 }
 
 /// Parses an extended parameter's value as a number (`None` if it is not one).
