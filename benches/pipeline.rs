@@ -6,12 +6,12 @@ use std::hint::black_box;
 use std::path::Path;
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use delta_gcode::analysis::{MoveChecker, Scratch, Sequencer};
+use delta_gcode::analysis::{MoveChecker, Scratch, sequence};
 use delta_gcode::delta::{BLOCK, ForceBlock, StateBlock};
+use delta_gcode::firmware::klipper::planner::{PlannedMove, Planner};
 use delta_gcode::gcode::{ArcRules, Event, interpret};
 use delta_gcode::machine::Machine;
 use delta_gcode::path::Vec3;
-use delta_gcode::planner::{PlannedMove, Planner};
 
 fn repo(p: &str) -> String {
     format!("{}/{p}", env!("CARGO_MANIFEST_DIR"))
@@ -89,13 +89,10 @@ fn bench(c: &mut Criterion) {
 
     // The sequential stages (shaper, drive) into one batch; then the sampling, the model
     // and the statistics over it, on one thread: `check`'s own per-move code.
-    let geometry = MoveChecker::new(&machine, ());
-    let mut sequencer = Sequencer::new(&machine, &geometry);
-    for mv in &moves {
-        sequencer.push(mv);
-    }
-    sequencer.finish();
-    let batch = sequencer.take_batch(true);
+    let data = std::fs::read(repo("samples/calib-cube_cura413_kossel-mini.gcode")).expect("sample");
+    let mut batch = None;
+    sequence(&data[..], &machine, usize::MAX, |_| {}, |b| batch = Some(b)).expect("read");
+    let batch = batch.expect("a batch");
     let checker = MoveChecker::new(&machine, ());
     let mut scratch = Box::<Scratch>::default();
     let mut out = Vec::new();

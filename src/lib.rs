@@ -9,12 +9,12 @@
 pub mod analysis;
 pub mod delta;
 pub mod emit;
+pub mod firmware;
 pub mod gcode;
 pub mod klipper_import;
 pub mod machine;
 pub mod motion;
 pub mod path;
-pub mod planner;
 pub mod plot;
 pub mod report;
 pub mod resample;

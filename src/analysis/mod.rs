@@ -12,10 +12,10 @@ use anyhow::Context;
 use indicatif::ProgressBar;
 use rayon::prelude::*;
 
+use crate::firmware;
 use crate::gcode::{self, Diagnostic, Event, ReadStats, Severity};
 use crate::machine::Machine;
 use crate::path::Vec3;
-use crate::planner::{PlannedMove, Planner};
 use crate::report::{MAX_LISTED, MoveStats, Report};
 
 mod move_check;
@@ -62,7 +62,7 @@ const BATCHES_IN_FLIGHT: usize = 2;
 /// (the verdict's statistics and what `observer` kept), `on_diag` every diagnostic of the
 /// reader.
 ///
-/// The reader, interpreter, planner, shaper and drive run on this thread; the sampling, the
+/// The reader, interpreter, firmware and drive run on this thread; the sampling, the
 /// model and the observers run on another, fed batches of pieces through a bounded
 /// channel, and spread each batch over the rayon pool. So the sequential stages overlap
 /// the parallel one, and memory stays bounded.
@@ -87,49 +87,62 @@ pub fn run<R: Read, O: Observer>(
                 on_move(last);
             }
         });
-        let geometry = MoveChecker::new(machine, ());
-        let mut sequencer = Sequencer::new(machine, &geometry);
-        let mut planner = Planner::new(machine);
-        let home = Vec3::new(0.0, 0.0, machine.geometry.home_z_mm);
-        let mut planned = Vec::new();
         // A send fails only when the model stage has stopped, and then its panic is
         // re-raised by the join below.
-        let hand_on = |planned: &mut Vec<PlannedMove>, sequencer: &mut Sequencer| {
-            for mv in planned.drain(..) {
-                sequencer.push(&mv);
-            }
-            if sequencer.pending_pieces() >= BATCH {
-                let _ = to_model.send(sequencer.take_batch(false));
-            }
-        };
-        let read = gcode::interpret(
-            input,
-            home,
-            machine.arc_rules,
-            |event: Event| {
-                planner.push(event, &mut planned);
-                if !planned.is_empty() {
-                    hand_on(&mut planned, &mut sequencer);
-                }
-                if let Event::Shaper { change, .. } = event {
-                    sequencer.set_input_shaper(&change);
-                }
-            },
-            on_diag,
-        );
-        planner.finish(&mut planned);
-        hand_on(&mut planned, &mut sequencer);
-        sequencer.finish();
-        let print_time_s = sequencer.commanded_span_s();
-        let _ = to_model.send(sequencer.take_batch(true));
+        let totals = sequence(input, machine, BATCH, on_diag, |batch| {
+            let _ = to_model.send(batch);
+        });
         drop(to_model);
         if let Err(panic) = model.join() {
             std::panic::resume_unwind(panic);
         }
-        Ok(RunTotals {
-            read: read?,
-            print_time_s,
-        })
+        totals
+    })
+}
+
+/// The sequential stages over `input`: the reader and interpreter, the firmware (the
+/// commanded motion) and the [`Sequencer`] (the drive, the checks, the grouping by line);
+/// `on_batch` gets the work for the sampling in batches of about `batch_pieces` pieces,
+/// the last one complete.
+pub fn sequence<R: Read>(
+    input: R,
+    machine: &Machine,
+    batch_pieces: usize,
+    on_diag: impl FnMut(Diagnostic),
+    mut on_batch: impl FnMut(Batch),
+) -> io::Result<RunTotals> {
+    let geometry = MoveChecker::new(machine, ());
+    let mut sequencer = Sequencer::new(machine, &geometry);
+    let mut firmware = firmware::for_machine(machine);
+    let mut commanded = Vec::new();
+    let home = Vec3::new(0.0, 0.0, machine.geometry.home_z_mm);
+    let read = gcode::interpret(
+        input,
+        home,
+        machine.arc_rules,
+        |event: Event| {
+            if let Event::Move(m) = &event {
+                sequencer.check(m);
+            }
+            firmware.push(&event, &mut commanded);
+            for c in commanded.drain(..) {
+                sequencer.commanded(c);
+            }
+            if sequencer.pending_pieces() >= batch_pieces {
+                on_batch(sequencer.take_batch(false));
+            }
+        },
+        on_diag,
+    );
+    firmware.finish(&mut commanded);
+    for c in commanded.drain(..) {
+        sequencer.commanded(c);
+    }
+    sequencer.finish();
+    on_batch(sequencer.take_batch(true));
+    Ok(RunTotals {
+        read: read?,
+        print_time_s: sequencer.commanded_span_s(),
     })
 }
 

@@ -5,7 +5,7 @@ use crate::delta::{BLOCK, DeltaModel, ForceBlock, StateBlock};
 use crate::machine::Machine;
 use crate::motion::Segment;
 use crate::motion::drive::{Drive, Response};
-use crate::planner::PlannedMove;
+use crate::path::Path;
 use crate::report::{MoveStats, NEAR_SINGULAR_RATIO, Problem};
 use crate::resample::{Phase, PieceWork, Sample, SampleSink, sample_piece};
 
@@ -100,26 +100,26 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
         }
     }
 
-    /// The checks on a planned move's path as a whole: the print disc, the bed, and how
-    /// close the arms come to flat (the carriage speed ratio peaks where the path is
-    /// farthest from a tower).
-    pub fn check_geometry(&self, mv: &PlannedMove, stats: &mut MoveStats) {
+    /// The checks on a move's path as a whole: the print disc, the bed, and how close the
+    /// arms come to flat (the carriage speed ratio peaks where the path is farthest from a
+    /// tower).
+    pub fn check_geometry(&self, path: &Path, stats: &mut MoveStats) {
         let limit_mm = self.machine.geometry.print_radius_mm;
-        let radius_mm = mv.path.max_xy2_mm2().sqrt();
+        let radius_mm = path.max_xy2_mm2().sqrt();
         if radius_mm > limit_mm + GEOMETRY_TOLERANCE_MM {
             stats.flag(Problem::OutsideRadius {
                 radius_mm,
                 limit_mm,
             });
         }
-        let z_mm = mv.path.min_z_mm();
+        let z_mm = path.min_z_mm();
         if z_mm < -GEOMETRY_TOLERANCE_MM {
             stats.flag(Problem::BelowBed { z_mm });
         }
         for (tower, xy) in self.model.towers_xy_mm().into_iter().enumerate() {
             let ratio = self
                 .model
-                .carriage_speed_ratio(tower, mv.path.max_dist2_from_mm2(xy).sqrt());
+                .carriage_speed_ratio(tower, path.max_dist2_from_mm2(xy).sqrt());
             if ratio > NEAR_SINGULAR_RATIO && stats.near_singular.is_none_or(|(_, r)| ratio > r) {
                 stats.near_singular = Some((tower, ratio));
             }

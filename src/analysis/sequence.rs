@@ -1,17 +1,15 @@
-//! The sequential part of the pipeline after the planner: planned moves → planned pieces →
-//! commanded pieces (the input shaper) → actual pieces (the drive's lag at each start) →
-//! the work of sampling them, grouped by G-code line with the checks of the line's planned
-//! moves. All of it is cheap per piece; the sampling itself runs in parallel afterwards.
+//! The sequential part of the pipeline after the firmware: commanded pieces → actual pieces
+//! (the drive's lag at each start) → the work of sampling them, grouped by G-code line
+//! with the checks of the line's moves. All of it is cheap per piece; the sampling itself
+//! runs in parallel afterwards.
 
 use std::collections::VecDeque;
 
+use crate::gcode::Move;
 use crate::machine::Machine;
 use crate::motion::drive::{ActualPiece, Drive, DriveStage, Response};
-use crate::motion::planned::PlannedPieces;
-use crate::motion::shaper::{InputShaper, Shaper, ShaperChange};
 use crate::motion::{CONTINUITY_MM, Segment};
 use crate::path::Vec3;
-use crate::planner::PlannedMove;
 use crate::report::MoveStats;
 use crate::resample::{JUMP_MIN_MM_S, Kicks, PieceWork};
 
@@ -47,10 +45,6 @@ pub struct Sequencer<'c> {
     checker: &'c MoveChecker<'c>,
     period_s: f64,
     response: Option<Response>,
-    planned: PlannedPieces,
-    /// The input shaper in force, and its stream.
-    input_shaper: InputShaper,
-    shaper: Shaper,
     drive: DriveStage,
     /// The last actual piece, held back until the next one tells its end (rigid impulses,
     /// the end sample), with the duration of the one before it.
@@ -73,9 +67,6 @@ impl<'c> Sequencer<'c> {
                 Drive::Rigid => None,
                 Drive::Spring(s) => Some(Response::new(s)),
             },
-            planned: PlannedPieces::new(),
-            input_shaper: machine.input_shaper,
-            shaper: Shaper::new(&machine.input_shaper),
             drive: DriveStage::new(&machine.drive),
             held: None,
             corner_until_s: f64::NEG_INFINITY,
@@ -86,36 +77,28 @@ impl<'c> Sequencer<'c> {
         }
     }
 
-    /// Takes the next planned move.
-    pub fn push(&mut self, mv: &PlannedMove) {
-        let mut stats = MoveStats::new(mv.line);
-        stats.offset_mm = mv.offset_mm.into();
-        self.checker.check_geometry(mv, &mut stats);
-        let end = mv.path.end();
+    /// Takes a move of the G-code for the checks on its path (before its pieces come).
+    pub fn check(&mut self, m: &Move) {
+        let mut stats = MoveStats::new(m.line);
+        stats.offset_mm = m.offset_mm.into();
+        self.checker.check_geometry(&m.path, &mut stats);
+        let end = m.path.end();
         self.checked.push_back((stats, [end.x, end.y]));
-        let mut commanded = Vec::new();
-        self.planned.push(mv, &mut |seg| {
-            self.shaper.push(seg, &mut |c| commanded.push(c));
+    }
+
+    /// Takes the next piece of the commanded motion.
+    pub fn commanded(&mut self, c: Segment) {
+        self.span_s = Some(match self.span_s {
+            None => (c.t0_s, c.t1_s()),
+            Some((a, _)) => (a, c.t1_s()),
         });
-        for c in commanded {
-            self.commanded(c);
-        }
+        let piece = self.drive.push(&c);
+        self.actual(piece);
     }
 
-    /// SET_INPUT_SHAPER: the moves after it are shaped with the changed shaper.
-    pub fn set_input_shaper(&mut self, change: &ShaperChange) {
-        self.input_shaper.apply(change);
-        self.shaper.reconfigure(&self.input_shaper);
-    }
-
-    /// The end of the motion: what the shaper still holds, the drive's settling, the last
-    /// piece.
+    /// The end of the motion: the drive's settling, the last piece, the lines checked
+    /// that had no piece.
     pub fn finish(&mut self) {
-        let mut commanded = Vec::new();
-        self.shaper.finish(&mut |c| commanded.push(c));
-        for c in commanded {
-            self.commanded(c);
-        }
         if let (Some(r), Some((last, _))) = (&self.response, &self.held) {
             let seg = last.commanded;
             let (p, _) = seg.end();
@@ -158,15 +141,6 @@ impl<'c> Sequencer<'c> {
     /// Pieces waiting in the batch.
     pub fn pending_pieces(&self) -> usize {
         self.batch.pieces.len()
-    }
-
-    fn commanded(&mut self, c: Segment) {
-        self.span_s = Some(match self.span_s {
-            None => (c.t0_s, c.t1_s()),
-            Some((a, _)) => (a, c.t1_s()),
-        });
-        let piece = self.drive.push(&c);
-        self.actual(piece);
     }
 
     /// The next actual piece: the held one can now be sampled.
@@ -296,23 +270,6 @@ mod tests {
     use crate::machine::test_support::kossel_machine;
     use crate::motion::drive::Spring;
     use crate::motion::shaper::{AxisShaper, ShaperType};
-    use crate::planner::Planner;
-
-    fn plan(machine: &Machine, gcode: &str) -> Vec<PlannedMove> {
-        let mut planner = Planner::new(machine);
-        let mut moves = Vec::new();
-        let home = Vec3::new(0.0, 0.0, machine.geometry.home_z_mm);
-        interpret(
-            gcode.as_bytes(),
-            home,
-            ArcRules::default(),
-            |e| planner.push(e, &mut moves),
-            |_| {},
-        )
-        .unwrap();
-        planner.finish(&mut moves);
-        moves
-    }
 
     /// A shaped, sprung machine and a file of short moves, an arc, a move out of reach.
     fn setup() -> (Machine, String) {
@@ -334,26 +291,43 @@ mod tests {
         (machine, gcode)
     }
 
-    fn sequence(machine: &Machine, moves: &[PlannedMove], batch_every: usize) -> Vec<Batch> {
-        let geometry = MoveChecker::new(machine, ());
-        let mut s = Sequencer::new(machine, &geometry);
-        let mut batches = Vec::new();
-        for mv in moves {
-            s.push(mv);
-            if s.pending_pieces() >= batch_every {
-                batches.push(s.take_batch(false));
-            }
-        }
-        s.finish();
-        batches.push(s.take_batch(true));
-        batches
+    fn batches(machine: &Machine, gcode: &str, batch_pieces: usize) -> Vec<Batch> {
+        let mut out = Vec::new();
+        crate::analysis::sequence(
+            gcode.as_bytes(),
+            machine,
+            batch_pieces,
+            |_| {},
+            |b| out.push(b),
+        )
+        .unwrap();
+        out
+    }
+
+    /// The G-code lines with moves, in order (an arc's chords are one).
+    fn move_lines(machine: &Machine, gcode: &str) -> Vec<u64> {
+        let mut lines = Vec::new();
+        let home = Vec3::new(0.0, 0.0, machine.geometry.home_z_mm);
+        interpret(
+            gcode.as_bytes(),
+            home,
+            ArcRules::default(),
+            |e| {
+                if let crate::gcode::Event::Move(m) = e {
+                    lines.push(m.line);
+                }
+            },
+            |_| {},
+        )
+        .unwrap();
+        lines.dedup();
+        lines
     }
 
     #[test]
     fn pieces_are_contiguous_and_each_line_is_one_group() {
         let (machine, gcode) = setup();
-        let moves = plan(&machine, &gcode);
-        let whole = sequence(&machine, &moves, usize::MAX);
+        let whole = batches(&machine, &gcode, usize::MAX);
         assert_eq!(whole.len(), 1);
         let b = &whole[0];
         for w in b.pieces.windows(2) {
@@ -363,9 +337,7 @@ mod tests {
         }
         // One group per line with motion, in file order, covering every piece once.
         let lines: Vec<u64> = b.moves.iter().map(|m| m.stats.line).collect();
-        let mut planned_lines: Vec<u64> = moves.iter().map(|m| m.line).collect();
-        planned_lines.dedup();
-        assert_eq!(lines, planned_lines);
+        assert_eq!(lines, move_lines(&machine, &gcode));
         assert_eq!(
             b.moves.iter().map(|m| m.count).sum::<usize>(),
             b.pieces.len()
@@ -376,8 +348,9 @@ mod tests {
             }
         }
         // The arc (line 43) has many chords, all in its group; the move out of reach
-        // (line 45) is flagged by its planned move's check.
-        assert!(moves.iter().filter(|m| m.line == 43).count() > 5);
+        // (line 45) is flagged by its check.
+        let arc = b.moves.iter().find(|m| m.stats.line == 43).unwrap();
+        assert!(arc.count > 5);
         let far = b.moves.iter().find(|m| m.stats.line == 45).unwrap();
         assert!(far.stats.problem.is_some());
     }
@@ -385,7 +358,6 @@ mod tests {
     #[test]
     fn moves_sharing_blocks_and_batches_get_what_they_get_alone() {
         let (machine, gcode) = setup();
-        let moves = plan(&machine, &gcode);
         let observer = (
             TraceRows {
                 motors: &machine.motors,
@@ -397,7 +369,7 @@ mod tests {
         );
         let checker = MoveChecker::new(&machine, observer);
         let mut scratch = Box::<Scratch>::default();
-        let whole = &sequence(&machine, &moves, usize::MAX)[0];
+        let whole = &batches(&machine, &gcode, usize::MAX)[0];
         let mut together: Vec<MoveResult<_>> = Vec::new();
         checker.check_moves(&mut scratch, &whole.pieces, &whole.moves, &mut together);
         assert!(together.iter().map(|r| r.stats.samples).sum::<u64>() > 4000);
@@ -412,7 +384,7 @@ mod tests {
         }
         // Small batches split lines; their parts, merged, give the same results.
         let mut merged: Vec<MoveResult<_>> = Vec::new();
-        for b in sequence(&machine, &moves, 7) {
+        for b in batches(&machine, &gcode, 7) {
             let mut out = Vec::new();
             checker.check_moves(&mut scratch, &b.pieces, &b.moves, &mut out);
             for r in out {

@@ -2,8 +2,8 @@
 //! its straight line; a rest wherever the toolhead waits (an extrude-only move, a dwell).
 
 use super::{Phase, Segment};
+use crate::firmware::klipper::planner::PlannedMove;
 use crate::path::Vec3;
-use crate::planner::PlannedMove;
 
 /// Planned moves in, in time order; the planned motion out as contiguous pieces.
 #[derive(Clone, Debug, Default)]

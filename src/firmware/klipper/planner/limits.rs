@@ -193,8 +193,8 @@ impl MoveLimits {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::firmware::klipper::planner::tests::machine;
     use crate::path::Path;
-    use crate::planner::tests::machine;
 
     #[test]
     fn slow_radii_of_a_kossel() {
