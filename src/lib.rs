@@ -13,6 +13,7 @@ pub mod gcode;
 pub mod klipper_import;
 pub mod machine;
 pub mod motion;
+pub mod motor;
 pub mod path;
 pub mod planner;
 pub mod plot;
