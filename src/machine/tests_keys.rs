@@ -638,3 +638,47 @@ fn flow_mappings_are_located_at_their_key() {
             .map(|l| (l + 1, 1))
     );
 }
+
+#[test]
+fn shipped_drives_are_the_documented_derivation() {
+    // Each shipped spring is the default of its own figures, rounded to 0.01 Hz (the QQ-S's
+    // with its 16-tooth pulley, which its `max_force_n` form does not carry).
+    let profiles = [
+        (
+            include_str!("../../machines/anycubic-kossel-linear-plus.yaml"),
+            None,
+        ),
+        (include_str!("../../machines/flsun-q5.yaml"), None),
+        (
+            include_str!("../../machines/flsun-qqs-pro.yaml"),
+            Some((
+                "  max_force_n: 39.0",
+                "  holding_torque_nm: 0.4\n  pulley_teeth: 16\n  safety_factor: 2",
+            )),
+        ),
+        (include_str!("../../machines/rostock-max-v3.yaml"), None),
+    ];
+    for (text, swap) in profiles {
+        let shipped = load(text);
+        let Drive::Spring(given) = shipped.drive else {
+            panic!("{}: not a spring", shipped.name);
+        };
+        assert_eq!(given.damping_ratio, 0.1);
+        let mut bare: String = text
+            .lines()
+            .filter(|l| !l.starts_with("drive:"))
+            .map(|l| format!("{l}\n"))
+            .collect();
+        if let Some((from, to)) = swap {
+            bare = bare.replace(from, to);
+        }
+        let derived = load(&bare).drive_default.unwrap().spring;
+        assert!(
+            (derived.frequency_hz - given.frequency_hz).abs() < 0.006,
+            "{}: {} vs {}",
+            shipped.name,
+            derived.frequency_hz,
+            given.frequency_hz
+        );
+    }
+}
