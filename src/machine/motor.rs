@@ -154,12 +154,20 @@ fn pulley_radius_m(raw: &RawMotors) -> Result<Option<f64>, Invalid> {
 fn unknown_model(name: &str) -> Invalid {
     let names: Vec<&str> = motor_table::MOTORS.iter().map(|m| m.name).collect();
     let lower = name.to_ascii_lowercase();
-    let hint = names
+    // A name cut short (the maker's suffix left out) or mistyped.
+    let prefix_of = names
         .iter()
-        .map(|n| (super::location::edit_distance(&lower, n), n))
-        .filter(|&(d, n)| d <= n.len() / 3)
-        .min_by_key(|&(d, _)| d)
-        .map(|(_, n)| format!(" (did you mean `{n}`?)"))
+        .find(|n| !lower.is_empty() && n.starts_with(&lower));
+    let hint = prefix_of
+        .or_else(|| {
+            names
+                .iter()
+                .map(|n| (super::location::edit_distance(&lower, n), n))
+                .filter(|&(d, n)| d <= n.len() / 3)
+                .min_by_key(|&(d, _)| d)
+                .map(|(_, n)| n)
+        })
+        .map(|n| format!(" (did you mean `{n}`?)"))
         .unwrap_or_default();
     Invalid::new(
         "motors.model",
