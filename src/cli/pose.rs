@@ -87,7 +87,6 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let s = model
         .evaluate(pos, vel, acc)
         .with_context(|| format!("nozzle position ({x}, {y}, {z}) mm is unreachable"))?;
-    let available_force_n = s.dq_mm_s.map(|v| machine.motors.available_force_n(v));
     match args.format {
         Format::Json => {
             /// The model's state and the force each motor can give at its carriage's speed.
@@ -99,7 +98,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
             }
             let out = PoseJson {
                 state: &s,
-                available_force_n,
+                available_force_n: s.dq_mm_s.map(|v| machine.motors.available_force_n(v)),
             };
             println!("{}", serde_json::to_string(&out)?);
         }

@@ -29,6 +29,15 @@ fn numbers(v: &Value) -> Vec<f64> {
         .unwrap_or_default()
 }
 
+/// One of the import's notes holds `fragment`.
+fn assert_note(p: &ImportedProfile, fragment: &str) {
+    assert!(
+        p.notes.iter().any(|n| n.contains(fragment)),
+        "{fragment:?} not in {:?}",
+        p.notes
+    );
+}
+
 fn import(text: &str, origin: &str) -> ImportedProfile {
     import_klipper(text, origin, &ImportExtras::default())
         .unwrap_or_else(|e| panic!("import failed: {e}"))
@@ -163,11 +172,7 @@ fn kossel_print_radius_defaults_to_klipper_reach() {
     assert_eq!(f(&v, "geometry.home_z_mm"), 295.6);
     assert_eq!(f(&v, "limits.max_velocity_mm_s"), 500.0);
     assert_eq!(f(&v, "limits.max_z_velocity_mm_s"), 200.0);
-    assert!(
-        p.notes.iter().any(|n| n.contains("clamped")),
-        "{:?}",
-        p.notes
-    );
+    assert_note(&p, "clamped");
 }
 
 #[test]
@@ -192,18 +197,8 @@ fn edge_cases() {
     assert_eq!(f(&v, "extruder.max_extrude_only_velocity_mm_s"), 120.0);
     assert_eq!(f(&v, "extruder.instantaneous_corner_velocity_mm_s"), 2.5);
     assert!(v["extruder"].get("max_extrude_only_accel_mm_s2").is_none());
-    assert!(
-        p.notes.iter().any(|n| n.contains("[include mainsail.cfg]")),
-        "{:?}",
-        p.notes
-    );
-    assert!(
-        p.notes
-            .iter()
-            .any(|n| n.contains("position_endstop differs")),
-        "{:?}",
-        p.notes
-    );
+    assert_note(&p, "[include mainsail.cfg]");
+    assert_note(&p, "position_endstop differs");
 }
 
 #[test]
@@ -328,13 +323,7 @@ fn motion_sections_shaper_arcs_and_motor_figures() {
     );
     // A trimmed [extruder]: no filament_diameter, the usual 1.75 and a note.
     assert_eq!(f(&v, "extruder.filament_diameter_mm"), 1.75);
-    assert!(
-        p.notes
-            .iter()
-            .any(|n| n.contains("[extruder] has no filament_diameter")),
-        "{:?}",
-        p.notes
-    );
+    assert_note(&p, "[extruder] has no filament_diameter");
     assert_eq!(
         p.missing,
         [
@@ -411,18 +400,8 @@ fn gear_ratio_divides_the_belt_travel_and_towers_may_differ() {
     let v = parse(&p);
     // 40 mm per output turn, the motor turning 3 times: 13.333 mm per motor turn.
     assert!((f(&v, "motors.rotation_distance_mm") - 40.0 / 3.0).abs() < 1e-12);
-    assert!(
-        p.notes.iter().any(|n| n.contains("gear_ratio 60:20")),
-        "{:?}",
-        p.notes
-    );
-    assert!(
-        p.notes
-            .iter()
-            .any(|n| n.contains("[stepper_c] moves 32.0 mm per motor turn")),
-        "{:?}",
-        p.notes
-    );
+    assert_note(&p, "gear_ratio 60:20");
+    assert_note(&p, "[stepper_c] moves 32.0 mm per motor turn");
 }
 
 #[test]

@@ -30,16 +30,6 @@ pub fn motor_stiffness_n_m(torque_nm: f64, step_angle_deg: f64, radius_m: f64) -
     torque_nm * rotor_teeth(step_angle_deg) / (radius_m * radius_m)
 }
 
-/// The keys that only the torque form uses.
-const TORQUE_FORM_KEYS: [&str; 6] = [
-    "rated_current_a",
-    "run_current_a",
-    "resistance_ohm",
-    "inductance_mh",
-    "supply_voltage_v",
-    "step_angle_deg",
-];
-
 /// Either `max_force_n`, or a motor (`holding_torque_nm` or `model`) + `safety_factor` on a
 /// pulley (`pulley_teeth` × `belt_pitch_mm`, or `rotation_distance_mm`); the rotor inertia,
 /// if given, reflected through the same pulley. On a bad combination or figure returns the
@@ -71,7 +61,8 @@ pub(super) fn resolve(raw: &RawMotors) -> Result<Motors, Invalid> {
     let holding_torque = raw.holding_torque_nm.or(spec.map(|s| s.holding_torque_nm));
     let torque_form = match (raw.max_force_n, holding_torque, raw.safety_factor) {
         (Some(f), None, None) => {
-            if let Some(key) = TORQUE_FORM_KEYS.iter().find(|k| raw.is_given(k)) {
+            let keys = raw.torque_form_keys();
+            if let Some((key, _)) = keys.iter().find(|(_, given)| *given) {
                 return Err(Invalid::new(
                     format!("motors.{key}"),
                     "used only with the torque form (`holding_torque_nm` or `model`, with \
@@ -234,8 +225,12 @@ fn finish_torque_form(
             "used only with `run_current_a`",
         ));
     }
-    for key in ["resistance_ohm", "inductance_mh"] {
-        if raw.is_given(key) && raw.supply_voltage_v.is_none() {
+    let electrical = [
+        ("resistance_ohm", raw.resistance_ohm),
+        ("inductance_mh", raw.inductance_mh),
+    ];
+    for (key, given) in electrical {
+        if given.is_some() && raw.supply_voltage_v.is_none() {
             return Err(Invalid::new(
                 format!("motors.{key}"),
                 "used only with `supply_voltage_v` (the force falling with speed)",

@@ -129,17 +129,16 @@ pub(super) struct RawMotors {
 }
 
 impl RawMotors {
-    /// Whether the profile gives the electrical or step-angle key `key`.
-    pub(super) fn is_given(&self, key: &str) -> bool {
-        match key {
-            "rated_current_a" => self.rated_current_a.is_some(),
-            "run_current_a" => self.run_current_a.is_some(),
-            "resistance_ohm" => self.resistance_ohm.is_some(),
-            "inductance_mh" => self.inductance_mh.is_some(),
-            "supply_voltage_v" => self.supply_voltage_v.is_some(),
-            "step_angle_deg" => self.step_angle_deg.is_some(),
-            _ => false,
-        }
+    /// The keys only the torque form takes, each with whether the profile gives it.
+    pub(super) fn torque_form_keys(&self) -> [(&'static str, bool); 6] {
+        [
+            ("rated_current_a", self.rated_current_a.is_some()),
+            ("run_current_a", self.run_current_a.is_some()),
+            ("resistance_ohm", self.resistance_ohm.is_some()),
+            ("inductance_mh", self.inductance_mh.is_some()),
+            ("supply_voltage_v", self.supply_voltage_v.is_some()),
+            ("step_angle_deg", self.step_angle_deg.is_some()),
+        ]
     }
 }
 
