@@ -2,9 +2,11 @@
 //! every figure checked. The rest of the program reads only this resolved form.
 //!
 //! The way in: [`Machine::from_yaml_str`] parses the text into the raw form of `schema`,
-//! whose `resolve` fills the defaults of `defaults` and turns the motor's figures into a
-//! force (`motor`); `validate` checks every figure; `location` gives each error its file,
-//! line and column.
+//! whose `resolve` fills the defaults of `defaults`, turns the motor's figures (or a motor
+//! of `motor_table`) into a force (`motor`), and reads the Klipper sections (`klipper`),
+//! the firmware (`marlin`) and the drive (`drive`); `validate` checks every figure; a
+//! profile without `drive` then gets the physical default (`drive`); `location` gives each
+//! error its file, line and column.
 
 pub mod defaults;
 mod drive;
@@ -18,6 +20,8 @@ mod schema;
 pub(crate) mod test_support;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_keys;
 mod validate;
 
 use crate::gcode::ArcRules;
@@ -267,5 +271,3 @@ impl Invalid {
         }
     }
 }
-#[cfg(test)]
-mod tests_keys;
