@@ -14,6 +14,7 @@ pub mod gcode;
 pub mod klipper_import;
 pub mod machine;
 pub mod motion;
+pub mod motor;
 pub mod path;
 pub mod plot;
 pub mod report;

@@ -92,3 +92,62 @@ fn a_cartesian_config_is_refused_with_its_line() {
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("cartesian.cfg:5"), "{}", stderr(&o));
 }
+
+#[test]
+fn shaper_arcs_and_motor_figures_are_imported() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("m.yaml");
+    let cfg = repo("tests/fixtures/klipper/motion-sections.cfg")
+        .display()
+        .to_string();
+    let args = [
+        "machine",
+        "import-klipper",
+        &cfg,
+        "-o",
+        &out.display().to_string(),
+        "--cart-kg",
+        "0.1",
+        "--link-kg",
+        "0.012",
+        "--platform-kg",
+        "0.12",
+    ];
+    let o = run(&args);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    // The motor itself is not in a Klipper config.
+    assert!(
+        stderr(&o).contains("missing motors.model, motors.safety_factor"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(
+        stderr(&o).contains("note: [extruder] has no filament_diameter"),
+        "{}",
+        stderr(&o)
+    );
+    // With the motor added, the profile loads and shows what was imported.
+    let text = fs::read_to_string(&out).unwrap().replace(
+        "  # MISSING: motors.model",
+        "  model: omc-17hm19-2004s\n  safety_factor: 1.5\n  # was: motors.model",
+    );
+    fs::write(&out, text).unwrap();
+    let m = run(&["machine", &out.display().to_string()]);
+    assert_eq!(m.status.code(), Some(0), "{}", stderr(&m));
+    let shown = stdout(&m);
+    for fragment in [
+        "arcs: Klipper's [gcode_arcs], chords of 0.5 mm",
+        "input shaper: x mzv at 48.2 Hz, damping ratio 0.1; y ei at 40.4 Hz, damping ratio 0.08",
+        "motor: omc-17hm19-2004s, ",
+    ] {
+        assert!(shown.contains(fragment), "{fragment:?} not in\n{shown}");
+    }
+    // With --max-force-n the motor's figures stay as comments and nothing is missing.
+    let o = run(&[&args[..], &["--max-force-n", "30"]].concat());
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("incomplete"), "{}", stderr(&o));
+    let text = fs::read_to_string(&out).unwrap();
+    assert!(text.contains("  # run_current_a: 1.2"), "{text}");
+    let m = run(&["machine", &out.display().to_string()]);
+    assert_eq!(m.status.code(), Some(0), "{}", stderr(&m));
+}

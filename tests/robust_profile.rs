@@ -170,3 +170,51 @@ fn unreadable_or_not_yaml() {
     assert!(stderr(&o).contains("/no/such/profile.yaml: cannot read the machine profile"));
     assert_error("name: Kossel Mini", "name: [Kossel", &["bad.yaml:"]);
 }
+
+#[test]
+fn bad_new_keys_stop_check_with_their_line() {
+    // The fixture's last line is `gravity_m_s2: 9.81` (line 51); the keys go after it.
+    let tail = "gravity_m_s2: 9.81";
+    assert_error(
+        tail,
+        "gravity_m_s2: 9.81\ndrive: {frequency_hz: 60, damping_ratio: 1.5}",
+        &["bad.yaml:52:", "drive.damping_ratio", "underdamped"],
+    );
+    assert_error(
+        tail,
+        "gravity_m_s2: 9.81\ndrive: stiff",
+        &["bad.yaml:52:8: drive: invalid value"],
+    );
+    assert_error(
+        tail,
+        "gravity_m_s2: 9.81\nmarlin:\n  steps_per_mm: 80",
+        &["bad.yaml:52:1: marlin", "only with `firmware: marlin`"],
+    );
+    assert_error(
+        tail,
+        "gravity_m_s2: 9.81\ninput_shaper:\n  shaper_type_x: mvz\n  shaper_freq_x: 40",
+        &[
+            "bad.yaml:53:3: input_shaper.shaper_type_x",
+            "did you mean `mzv`?",
+        ],
+    );
+    assert_error(
+        tail,
+        "gravity_m_s2: 9.81\ngcode_arcs: {resolution: -1}",
+        &["bad.yaml:52:14: gcode_arcs.resolution"],
+    );
+    assert_error(
+        "  max_force_n: 25.0",
+        "  model: ldo-42sth48\n  rotation_distance_mm: 40\n  safety_factor: 1",
+        &[
+            "bad.yaml:41:3: motors.model: unknown motor `ldo-42sth48`",
+            "did you mean `ldo-42sth48-2004ac`?",
+        ],
+    );
+    assert_error(
+        "  max_force_n: 25.0",
+        "  model: ldo-42sth48-2004ac\n  rotation_distance_mm: 40\n  safety_factor: 1\n  \
+         run_current_a: 2.5",
+        &["bad.yaml:44:3: motors.run_current_a", "above the rated 2 A"],
+    );
+}

@@ -1,5 +1,6 @@
 //! `delta-gcode machine import-klipper printer.cfg`: a machine profile from a Klipper delta
-//! configuration; masses and the motor limit come from flags, or are listed as missing.
+//! configuration; masses and the motor limit come from flags, or are listed as missing (the
+//! motor's pulley, step angle and driver current come from the configuration).
 
 use std::io::Write;
 use std::path::PathBuf;
@@ -57,7 +58,8 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     if !imported.missing.is_empty() {
         eprintln!(
             "delta-gcode: the profile is incomplete, missing {}: `check` refuses it until they \
-             are added (--cart-kg, --link-kg, --platform-kg, --max-force-n)",
+             are added (--cart-kg, --link-kg, --platform-kg; for the motors --max-force-n, or \
+             `model` and `safety_factor` in the file)",
             imported.missing.join(", ")
         );
     }

@@ -88,7 +88,20 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         .evaluate(pos, vel, acc)
         .with_context(|| format!("nozzle position ({x}, {y}, {z}) mm is unreachable"))?;
     match args.format {
-        Format::Json => println!("{}", serde_json::to_string(&s)?),
+        Format::Json => {
+            /// The model's state and the force each motor can give at its carriage's speed.
+            #[derive(serde::Serialize)]
+            struct PoseJson<'a, S: serde::Serialize> {
+                #[serde(flatten)]
+                state: &'a S,
+                available_force_n: [f64; 3],
+            }
+            let out = PoseJson {
+                state: &s,
+                available_force_n: s.dq_mm_s.map(|v| machine.motors.available_force_n(v)),
+            };
+            println!("{}", serde_json::to_string(&out)?);
+        }
         Format::Text | Format::Github => {
             println!("machine: {}", machine.name);
             println!(

@@ -111,6 +111,32 @@ impl Section {
         self.entries.get(key).ok_or_else(|| self.missing(cfg, key))
     }
 
+    /// The key's entry, None when it is absent.
+    pub(super) fn optional(&self, key: &str) -> Option<&Entry> {
+        self.entries.get(key)
+    }
+
+    /// The section's name.
+    pub(super) fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// `[section] key`, for sources and notes.
+    pub(super) fn key_label(&self, key: &str) -> String {
+        self.label(key)
+    }
+
+    /// A [`ImportError::BadValue`] at the key's line (the header's when it is absent).
+    pub(super) fn bad_value(&self, cfg: &Config, key: &str, message: String) -> ImportError {
+        ImportError::BadValue {
+            origin: cfg.origin.clone(),
+            line: self.entries.get(key).map_or(self.line, |e| e.line),
+            section: self.name.clone(),
+            key: key.to_string(),
+            message,
+        }
+    }
+
     /// The key's number, None when the key is absent.
     pub(super) fn optional_float(
         &self,
@@ -121,13 +147,7 @@ impl Section {
         let Some(e) = self.entries.get(key) else {
             return Ok(None);
         };
-        let bad = |message: String| ImportError::BadValue {
-            origin: cfg.origin.clone(),
-            line: e.line,
-            section: self.name.clone(),
-            key: key.to_string(),
-            message,
-        };
+        let bad = |message: String| self.bad_value(cfg, key, message);
         let value: f64 = e
             .value
             .trim()
@@ -314,6 +334,13 @@ impl Config {
     /// A section, or an empty one (line 0) when it is absent.
     pub(super) fn optional_section(&self, name: &str) -> &Section {
         self.sections.get(name).unwrap_or(&self.empty)
+    }
+
+    /// The sections whose name passes `pred`, in the order of the file.
+    pub(super) fn sections_where(&self, pred: impl Fn(&str) -> bool) -> Vec<&Section> {
+        let mut found: Vec<&Section> = self.sections.values().filter(|s| pred(&s.name)).collect();
+        found.sort_by_key(|s| s.line);
+        found
     }
 }
 

@@ -13,6 +13,7 @@
 //! not followed; it is reported in [`ImportedProfile::notes`].
 
 mod ini;
+mod motion_rules;
 mod rules;
 #[cfg(test)]
 mod tests;

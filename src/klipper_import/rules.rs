@@ -5,7 +5,7 @@
 
 use super::ini::{Bound, Config, Figure, Section};
 use super::writer::{ProfileKey, Value};
-use super::{ImportError, ImportExtras, num};
+use super::{ImportError, ImportExtras, motion_rules, num};
 use crate::machine::defaults;
 
 /// The profile's keys from a parsed configuration and the figures Klipper does not hold
@@ -43,26 +43,22 @@ pub(super) fn profile_keys(
             ("platform_kg", extra.platform_kg, "effector + hotend + fans"),
         ],
     )?;
-    let motors = given(
-        cfg,
-        "motors",
-        &[(
-            "max_force_n",
-            extra.max_force_n,
-            "peak |Q_i| a carriage motor may deliver",
-        )],
-    )?;
-    let extruder = extruder_keys(cfg, extruder)?;
+    let extruder = extruder_keys(cfg, extruder, notes)?;
+    let motors = motion_rules::motors(cfg, extra, notes)?;
+    let arcs = motion_rules::gcode_arcs(cfg, notes)?;
+    let shaper = motion_rules::input_shaper(cfg)?;
     let sampling = vec![ProfileKey::number(
         "sampling",
         "period_s",
         defaults::SAMPLING_PERIOD_S,
         "delta-gcode default",
     )];
-    Ok([geometry, masses, limits, extruder, motors, sampling]
-        .into_iter()
-        .flatten()
-        .collect())
+    Ok([
+        geometry, masses, limits, extruder, motors, arcs, shaper, sampling,
+    ]
+    .into_iter()
+    .flatten()
+    .collect())
 }
 
 /// `[printer]`'s toolhead limits: max_velocity and max_accel (toolhead.py `ToolHead.__init__`,
@@ -260,29 +256,49 @@ fn geometry(
 }
 
 /// `[extruder]` as extruder.py `PrinterExtruder.__init__` reads it: nozzle_diameter and
-/// filament_diameter required; the extrude-only limits and instantaneous_corner_velocity
-/// written when set, else left to the loader, which applies Klipper's defaults. No keys
-/// when the section is absent.
-fn extruder_keys(cfg: &Config, extruder: &Section) -> Result<Vec<ProfileKey>, ImportError> {
+/// filament_diameter (required by Klipper; a trimmed configuration without them gets the
+/// usual 0.4 and 1.75 mm, with a note); the extrude-only limits and
+/// instantaneous_corner_velocity written when set, else left to the loader, which applies
+/// Klipper's defaults. No keys when the section is absent.
+fn extruder_keys(
+    cfg: &Config,
+    extruder: &Section,
+    notes: &mut Vec<String>,
+) -> Result<Vec<ProfileKey>, ImportError> {
     if extruder.line == 0 {
         return Ok(Vec::new());
     }
-    let nozzle = extruder.float(cfg, "nozzle_diameter", None, Bound::Above(0.0))?;
-    let filament = extruder.float(cfg, "filament_diameter", None, Bound::Above(0.0))?;
-    let mut keys = vec![
-        ProfileKey::number(
-            "extruder",
+    let mut keys = Vec::new();
+    for (key, out, usual) in [
+        (
+            "nozzle_diameter",
             "nozzle_diameter_mm",
-            nozzle.value,
-            nozzle.source(""),
+            defaults::NOZZLE_DIAMETER_MM,
         ),
-        ProfileKey::number(
-            "extruder",
+        (
+            "filament_diameter",
             "filament_diameter_mm",
-            filament.value,
-            filament.source(""),
+            defaults::FILAMENT_DIAMETER_MM,
         ),
-    ];
+    ] {
+        keys.push(
+            match extruder.optional_float(cfg, key, Bound::Above(0.0))? {
+                Some(f) => ProfileKey::number("extruder", out, f.value, f.source("")),
+                None => {
+                    notes.push(format!(
+                        "[extruder] has no {key} (Klipper requires it): the usual {} mm is taken",
+                        num(usual)
+                    ));
+                    ProfileKey::number(
+                        "extruder",
+                        out,
+                        usual,
+                        format!("not in [extruder]: the usual {} mm", num(usual)),
+                    )
+                }
+            },
+        );
+    }
     for (key, out, bound) in [
         (
             "max_extrude_only_velocity",
@@ -321,17 +337,7 @@ fn given(
 ) -> Result<Vec<ProfileKey>, ImportError> {
     keys.iter()
         .map(|&(key, value, what)| match value {
-            Some(x) if !(x.is_finite() && x > 0.0) => Err(ImportError::BadExtra {
-                origin: cfg.origin.clone(),
-                what: format!("{section}.{key}"),
-                message: format!("must be a positive number, got {x}"),
-            }),
-            Some(x) => Ok(ProfileKey::number(
-                section,
-                key,
-                x,
-                format!("{what}; given to the importer, not in the Klipper config"),
-            )),
+            Some(x) => given_number(cfg, section, key, x, what),
             None => Ok(ProfileKey {
                 section,
                 key,
@@ -339,4 +345,27 @@ fn given(
             }),
         })
         .collect()
+}
+
+/// A figure given to the importer (`what` it is): a positive number.
+pub(super) fn given_number(
+    cfg: &Config,
+    section: &'static str,
+    key: &'static str,
+    x: f64,
+    what: &'static str,
+) -> Result<ProfileKey, ImportError> {
+    if !(x.is_finite() && x > 0.0) {
+        return Err(ImportError::BadExtra {
+            origin: cfg.origin.clone(),
+            what: format!("{section}.{key}"),
+            message: format!("must be a positive number, got {x}"),
+        });
+    }
+    Ok(ProfileKey::number(
+        section,
+        key,
+        x,
+        format!("{what}; given to the importer, not in the Klipper config"),
+    ))
 }

@@ -6,6 +6,7 @@ const Q5: &str = include_str!("../../tests/fixtures/klipper/flsun-q5-2020.cfg");
 const KOSSEL: &str = include_str!("../../tests/fixtures/klipper/anycubic-kossel-plus-2017.cfg");
 const EDGE: &str = include_str!("../../tests/fixtures/klipper/edge-cases.cfg");
 const CARTESIAN: &str = include_str!("../../tests/fixtures/klipper/cartesian.cfg");
+const MOTION: &str = include_str!("../../tests/fixtures/klipper/motion-sections.cfg");
 const Q5_PROFILE: &str = include_str!("../../machines/flsun-q5.yaml");
 
 fn parse(p: &ImportedProfile) -> Value {
@@ -26,6 +27,15 @@ fn numbers(v: &Value) -> Vec<f64> {
     v.as_sequence()
         .map(|s| s.iter().filter_map(Value::as_f64).collect())
         .unwrap_or_default()
+}
+
+/// One of the import's notes holds `fragment`.
+fn assert_note(p: &ImportedProfile, fragment: &str) {
+    assert!(
+        p.notes.iter().any(|n| n.contains(fragment)),
+        "{fragment:?} not in {:?}",
+        p.notes
+    );
 }
 
 fn import(text: &str, origin: &str) -> ImportedProfile {
@@ -75,13 +85,16 @@ fn missing_masses_and_force_are_listed_and_left_out() {
             "masses.cart_kg",
             "masses.link_kg",
             "masses.platform_kg",
-            "motors.max_force_n"
+            "motors.model",
+            "motors.safety_factor"
         ]
     );
     let v = parse(&p);
-    // Empty mappings, so the loader's message names the first missing field.
+    // An empty mapping, so the loader's message names the first missing field.
     assert_eq!(v["masses"], Value::Mapping(Default::default()));
-    assert_eq!(v["motors"], Value::Mapping(Default::default()));
+    // The motor's pulley is Klipper's; the motor itself is missing.
+    assert_eq!(f(&v, "motors.rotation_distance_mm"), 40.0);
+    assert!(v["motors"].get("max_force_n").is_none());
     for key in &p.missing {
         assert!(p.yaml.contains(&format!("# MISSING: {key} —")), "{key}");
     }
@@ -140,6 +153,7 @@ fn shipped_q5_profile_agrees_with_the_import() {
         "limits.max_z_accel_mm_s2",
         "extruder.nozzle_diameter_mm",
         "extruder.filament_diameter_mm",
+        "motors.rotation_distance_mm",
     ] {
         assert_eq!(f(&shipped, path), f(&v, path), "{path}");
     }
@@ -158,11 +172,7 @@ fn kossel_print_radius_defaults_to_klipper_reach() {
     assert_eq!(f(&v, "geometry.home_z_mm"), 295.6);
     assert_eq!(f(&v, "limits.max_velocity_mm_s"), 500.0);
     assert_eq!(f(&v, "limits.max_z_velocity_mm_s"), 200.0);
-    assert!(
-        p.notes.iter().any(|n| n.contains("clamped")),
-        "{:?}",
-        p.notes
-    );
+    assert_note(&p, "clamped");
 }
 
 #[test]
@@ -187,18 +197,8 @@ fn edge_cases() {
     assert_eq!(f(&v, "extruder.max_extrude_only_velocity_mm_s"), 120.0);
     assert_eq!(f(&v, "extruder.instantaneous_corner_velocity_mm_s"), 2.5);
     assert!(v["extruder"].get("max_extrude_only_accel_mm_s2").is_none());
-    assert!(
-        p.notes.iter().any(|n| n.contains("[include mainsail.cfg]")),
-        "{:?}",
-        p.notes
-    );
-    assert!(
-        p.notes
-            .iter()
-            .any(|n| n.contains("position_endstop differs")),
-        "{:?}",
-        p.notes
-    );
+    assert_note(&p, "[include mainsail.cfg]");
+    assert_note(&p, "position_endstop differs");
 }
 
 #[test]
@@ -300,4 +300,170 @@ fn inline_comments() {
     assert_eq!(strip_inline_comment("^ar2#x"), "^ar2#x");
     assert_eq!(strip_inline_comment("# all"), "");
     assert_eq!(strip_inline_comment("a;b"), "a;b");
+}
+
+#[test]
+fn motion_sections_shaper_arcs_and_motor_figures() {
+    let p = import(MOTION, "motion.cfg");
+    let v = parse(&p);
+    assert_eq!(f(&v, "gcode_arcs.resolution"), 0.5);
+    assert_eq!(v["input_shaper"]["shaper_type_x"], Value::from("mzv"));
+    assert_eq!(f(&v, "input_shaper.shaper_freq_x"), 48.2);
+    assert_eq!(v["input_shaper"]["shaper_type_y"], Value::from("ei"));
+    assert_eq!(f(&v, "input_shaper.shaper_freq_y"), 40.4);
+    assert_eq!(f(&v, "input_shaper.damping_ratio_y"), 0.08);
+    assert!(v["input_shaper"].get("damping_ratio_x").is_none());
+    // rotation_distance 40, 400 full steps (0.9°), the TMC2209's run_current.
+    assert_eq!(f(&v, "motors.rotation_distance_mm"), 40.0);
+    assert_eq!(f(&v, "motors.step_angle_deg"), 0.9);
+    assert_eq!(f(&v, "motors.run_current_a"), 1.2);
+    assert!(
+        p.yaml
+            .contains("[tmc2209 stepper_a] run_current (line 37), A RMS")
+    );
+    // A trimmed [extruder]: no filament_diameter, the usual 1.75 and a note.
+    assert_eq!(f(&v, "extruder.filament_diameter_mm"), 1.75);
+    assert_note(&p, "[extruder] has no filament_diameter");
+    assert_eq!(
+        p.missing,
+        [
+            "masses.cart_kg",
+            "masses.link_kg",
+            "masses.platform_kg",
+            "motors.model",
+            "motors.safety_factor"
+        ]
+    );
+    // With the masses and a motor filled in, the profile loads with the shaper, the arcs
+    // and the motor's curve at the imported current and step angle.
+    let extra = ImportExtras {
+        cart_kg: Some(0.1),
+        link_kg: Some(0.012),
+        platform_kg: Some(0.12),
+        ..Default::default()
+    };
+    let yaml = import_klipper(MOTION, "motion.cfg", &extra).unwrap().yaml;
+    let yaml = yaml.replace(
+        "  # MISSING: motors.model",
+        "  model: ldo-42sth48-2004mac\n  safety_factor: 1\n  supply_voltage_v: 24\n  # was: motors.model",
+    );
+    let m = crate::machine::Machine::from_yaml_str(&yaml, "imported")
+        .unwrap_or_else(|e| panic!("{e}\n{yaml}"));
+    assert_eq!(
+        m.arc_rules,
+        crate::gcode::ArcRules::Klipper { resolution_mm: 0.5 }
+    );
+    assert_eq!(m.input_shaper.y.map(|s| s.damping_ratio), Some(0.08));
+    assert!(m.motors.curve.is_some());
+    // 0.49 N·m × 1.2/2.0 at r = 6.366198 mm: 46.1826 N below the knee.
+    assert!((m.motors.max_force_n - 0.49 * 0.6 / 0.006_366_198).abs() < 1e-3);
+}
+
+#[test]
+fn motor_figures_become_comments_next_to_max_force_n() {
+    let extra = ImportExtras {
+        max_force_n: Some(30.0),
+        ..Default::default()
+    };
+    let p = import_klipper(MOTION, "motion.cfg", &extra).unwrap();
+    let v = parse(&p);
+    assert_eq!(f(&v, "motors.max_force_n"), 30.0);
+    assert!(v["motors"].get("rotation_distance_mm").is_none());
+    assert!(
+        p.yaml
+            .contains("  # rotation_distance_mm: 40.0  # [stepper_a] rotation_distance")
+    );
+    assert!(
+        p.yaml
+            .contains("  # run_current_a: 1.2  # [tmc2209 stepper_a] run_current")
+    );
+    assert!(
+        !p.missing.iter().any(|m| m.starts_with("motors")),
+        "{:?}",
+        p.missing
+    );
+}
+
+#[test]
+fn gear_ratio_divides_the_belt_travel_and_towers_may_differ() {
+    let text = MOTION
+        .replacen(
+            "full_steps_per_rotation: 400\n",
+            "full_steps_per_rotation: 400\ngear_ratio: 60:20\n",
+            1,
+        )
+        .replace(
+            "[stepper_c]\nstep_pin: PB5\ndir_pin: PB4\nmicrosteps: 16\nrotation_distance: 40",
+            "[stepper_c]\nstep_pin: PB5\ndir_pin: PB4\nmicrosteps: 16\nrotation_distance: 32",
+        );
+    let p = import(&text, "g.cfg");
+    let v = parse(&p);
+    // 40 mm per output turn, the motor turning 3 times: 13.333 mm per motor turn.
+    assert!((f(&v, "motors.rotation_distance_mm") - 40.0 / 3.0).abs() < 1e-12);
+    assert_note(&p, "gear_ratio 60:20");
+    assert_note(&p, "[stepper_c] moves 32.0 mm per motor turn");
+}
+
+#[test]
+fn motion_sections_are_checked_as_klipper_checks_them() {
+    let cases = [
+        (
+            "shaper_type_x: mzv",
+            "shaper_type_x: mzv(t=0.7)",
+            "shaper_type_x",
+        ),
+        ("shaper_type_y: ei", "shaper_type_y: EI", "shaper_type_y"),
+        (
+            "damping_ratio_y: 0.08",
+            "damping_ratio_y: 0.45",
+            "damping_ratio_y",
+        ),
+        (
+            "damping_ratio_y: 0.08",
+            "damping_ratio_y: -0.1",
+            "damping_ratio_y",
+        ),
+        ("shaper_freq_x: 48.2", "shaper_freq_x: -1", "shaper_freq_x"),
+        ("resolution: 0.5", "resolution: 0", "resolution"),
+        (
+            "run_current: 1.2\nhold",
+            "run_current: 0\nhold",
+            "run_current",
+        ),
+        (
+            "full_steps_per_rotation: 400\narm",
+            "full_steps_per_rotation: 202\narm",
+            "full_steps_per_rotation",
+        ),
+        (
+            "rotation_distance: 40\nfull_steps_per_rotation: 400\narm",
+            "rotation_distance: 40\nfull_steps_per_rotation: 400\ngear_ratio: 3\narm",
+            "gear_ratio",
+        ),
+        (
+            "nozzle_diameter: 0.4",
+            "nozzle_diameter: 0",
+            "nozzle_diameter",
+        ),
+    ];
+    for (from, to, key) in cases {
+        let text = MOTION.replacen(from, to, 1);
+        assert_ne!(text, MOTION, "{from}");
+        let line = text
+            .lines()
+            .position(|l| l.starts_with(&format!("{key}:")))
+            .unwrap()
+            + 1;
+        match import_klipper(&text, "m.cfg", &ImportExtras::default()) {
+            Err(e @ ImportError::BadValue { .. }) => {
+                let msg = e.to_string();
+                assert!(
+                    msg.starts_with(&format!("m.cfg:{line}:")),
+                    "{msg} (line {line})"
+                );
+                assert!(msg.contains(key), "{msg}");
+            }
+            other => panic!("{to}: {other:?}"),
+        }
+    }
 }

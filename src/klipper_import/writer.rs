@@ -17,6 +17,9 @@ pub(super) enum Value {
     Known { yaml: String, source: String },
     /// Not in the config: a comment, and the profile loader applies Klipper's default.
     LoaderDefault,
+    /// Known, but not used by the profile's form: `# key: yaml  # source`, for the user to
+    /// take up (the motor's figures next to `max_force_n`).
+    Commented { yaml: String, source: String },
     /// Not known to Klipper and not given to the importer: a `# MISSING:` comment saying
     /// what it is, and an entry of [`super::ImportedProfile::missing`], so that the loader
     /// refuses the profile until it is added.
@@ -36,6 +39,15 @@ impl ProfileKey {
             key,
             value: Value::Known { yaml, source },
         }
+    }
+
+    /// The same key, written as a comment.
+    pub(super) fn commented(self) -> ProfileKey {
+        let value = match self.value {
+            Value::Known { yaml, source } => Value::Commented { yaml, source },
+            other => other,
+        };
+        ProfileKey { value, ..self }
     }
 
     /// A number, with its source.
@@ -83,6 +95,9 @@ pub(super) fn write(origin: &str, name: &str, keys: &[ProfileKey]) -> String {
         for ProfileKey { key, value, .. } in section {
             lines.push(match value {
                 Value::Known { yaml, source } => format!("  {key}: {yaml}  # {source}"),
+                Value::Commented { yaml, source } => format!(
+                    "  # {key}: {yaml}  # {source}; for the torque form, not with max_force_n"
+                ),
                 Value::LoaderDefault => {
                     format!("  # {key}: not set; the loader applies Klipper's default")
                 }

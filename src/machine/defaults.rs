@@ -70,3 +70,71 @@ pub fn edge_radius_mm(ratio: f64, min_arm_mm: f64, delta_radius_mm: f64) -> f64 
 pub fn klipper_reach_mm(min_arm_mm: f64, delta_radius_mm: f64) -> f64 {
     edge_radius_mm(REACH_RATIO, min_arm_mm, delta_radius_mm)
 }
+
+/// A stepper's full-step angle, degrees (delta-gcode's default for `motors.step_angle_deg`:
+/// the common 1.8°, 200 steps a turn; Klipper's `full_steps_per_rotation` defaults to 200).
+pub const STEP_ANGLE_DEG: f64 = 1.8;
+
+/// Klipper's `[input_shaper] shaper_type`: input_shaper.py `InputShaperParams.__init__`,
+/// `config.get('shaper_type', 'mzv')`.
+pub const SHAPER_TYPE: &str = "mzv";
+
+/// Klipper's `[input_shaper] damping_ratio_x` / `_y`: shaper_defs.py `DEFAULT_DAMPING_RATIO`.
+pub const SHAPER_DAMPING_RATIO: f64 = crate::motion::shaper::DEFAULT_SHAPER_DAMPING_RATIO;
+
+// The physical default of `drive` (docs/machine-profile.md, "The default drive").
+
+/// The drive's damping ratio when the profile gives none: a typical figure, not a
+/// measurement; it is the damping Klipper assumes of a printer's resonance when it builds
+/// its shapers (shaper_defs.py `DEFAULT_DAMPING_RATIO`).
+pub const DRIVE_DAMPING_RATIO: f64 = SHAPER_DAMPING_RATIO;
+
+/// Force per unit strain (E·A) of a 6 mm GT2 belt, N. Gates' own figure was not found in
+/// the sources searched; this is a measurement scaled by width: a 9 mm Gates GT2 belt (the
+/// Shapeoko 3's stock belt) stretched 2.9 mm over 500 mm (0.58 %) under 38 lbf (169.0 N)
+/// (community.carbide3d.com, "Belt stretch and stepper holding measured", post 22):
+/// 169.0 / 0.0058 = 29.1 kN for 9 mm, 19.4 kN for 6 mm.
+pub const GT2_6MM_BELT_EA_N: f64 = 19_400.0;
+
+/// The motor assumed when a profile gives only `max_force_n`: a NEMA 17 of 0.40 N·m
+/// holding torque (the class of the 17HS4401; the shipped profiles' assumption), 1.8°.
+pub const TYPICAL_HOLDING_TORQUE_NM: f64 = 0.40;
+
+/// The pulley assumed with [`TYPICAL_HOLDING_TORQUE_NM`]: GT2 (2 mm) 20 teeth, Klipper's
+/// `rotation_distance: 40`, the deltas' usual pulley.
+pub const TYPICAL_PULLEY_TEETH: u32 = 20;
+
+// Marlin's defaults (Marlin 2.1.2.x, config/default Configuration.h and
+// Configuration_adv.h, Configurations tag 2.1.2.4). Marlin's default configuration is a
+// Cartesian printer's: its Z figures (400 steps/mm, 5 mm/s, 100 mm/s², jerk 0.3 mm/s) are a
+// lead screw's. A delta's three towers are Marlin's X, Y and Z steppers and every Marlin
+// delta example sets them alike, so the towers take Marlin's X defaults.
+
+/// `DEFAULT_AXIS_STEPS_PER_UNIT` X (towers): 80 (200 steps × 16 / (2 mm × 20 teeth)).
+pub const MARLIN_STEPS_PER_MM: f64 = 80.0;
+/// `DEFAULT_AXIS_STEPS_PER_UNIT` E: 500.
+pub const MARLIN_E_STEPS_PER_MM: f64 = 500.0;
+/// `DEFAULT_SEGMENTS_PER_SECOND` (delta; M665 S): 200.
+pub const MARLIN_SEGMENTS_PER_SECOND: f64 = 200.0;
+/// `DEFAULT_MAX_FEEDRATE` (M203), mm/s: X 300 for each tower, E 25.
+pub const MARLIN_MAX_FEEDRATE_MM_S: [f64; 4] = [300.0, 300.0, 300.0, 25.0];
+/// `DEFAULT_MAX_ACCELERATION` (M201), mm/s²: X 3000 for each tower, E 10000.
+pub const MARLIN_MAX_ACCEL_MM_S2: [f64; 4] = [3000.0, 3000.0, 3000.0, 10000.0];
+/// `DEFAULT_ACCELERATION` (M204 P), mm/s².
+pub const MARLIN_PRINT_ACCEL_MM_S2: f64 = 3000.0;
+/// `DEFAULT_RETRACT_ACCELERATION` (M204 R), mm/s².
+pub const MARLIN_RETRACT_ACCEL_MM_S2: f64 = 3000.0;
+/// `DEFAULT_TRAVEL_ACCELERATION` (M204 T), mm/s².
+pub const MARLIN_TRAVEL_ACCEL_MM_S2: f64 = 3000.0;
+/// `DEFAULT_XJERK` for each tower and `DEFAULT_EJERK` (M205 X/Z/E, classic jerk), mm/s.
+pub const MARLIN_JERK_MM_S: [f64; 4] = [10.0, 10.0, 10.0, 5.0];
+/// `S_CURVE_ACCELERATION`: off.
+pub const MARLIN_S_CURVE: bool = false;
+/// `BLOCK_BUFFER_SIZE` (Configuration_adv.h): 16.
+pub const MARLIN_BLOCK_BUFFER_SIZE: u32 = 16;
+/// `MIN_STEPS_PER_SEGMENT` (Configuration_adv.h): 6.
+pub const MARLIN_MIN_STEPS_PER_SEGMENT: u32 = 6;
+/// `DEFAULT_MINSEGMENTTIME` (M205 B), µs: 20000.
+pub const MARLIN_MIN_SEGMENT_TIME_US: u32 = 20_000;
+/// `MINIMUM_PLANNER_SPEED` (Configuration_adv.h), mm/s: 0.05.
+pub const MARLIN_MINIMUM_PLANNER_SPEED_MM_S: f64 = 0.05;

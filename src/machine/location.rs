@@ -60,29 +60,60 @@ pub(super) fn edit_distance(a: &str, b: &str) -> usize {
 }
 
 /// Line and column (1-based) of a dotted key such as `geometry.arm_length_mm` in the YAML
-/// text: the section at indent 0, then the key indented below it. Best effort: validation
-/// runs on the parsed values, which carry no position.
+/// text: the section at indent 0, then the key indented below it or inside a flow mapping
+/// (`masses: {cart_kg: 0.2, …}`); the section's line when the key is not written (a
+/// default). Best effort: validation runs on the parsed values, which carry no position.
 pub(super) fn locate_key(text: &str, dotted: &str) -> Option<(usize, usize)> {
     let mut parts = dotted.split('.');
     let first = parts.next()?;
     let second = parts.next();
-    let mut in_section = false;
+    let mut section_line = None;
     for (n, line) in text.lines().enumerate() {
         let trimmed = line.trim_start();
         let indent = line.len() - trimmed.len();
-        let is_key = |k: &str| {
-            trimmed
-                .strip_prefix(k)
-                .is_some_and(|r| r.trim_start().starts_with(':'))
-        };
         if indent == 0 && !trimmed.is_empty() && !trimmed.starts_with('#') {
-            in_section = is_key(first);
-            if in_section && second.is_none() {
-                return Some((n + 1, 1));
+            if section_line.is_some() {
+                break;
             }
-        } else if in_section && second.is_some_and(is_key) {
-            return Some((n + 1, indent + 1));
+            if is_key(trimmed, first) {
+                let Some(key) = second else {
+                    return Some((n + 1, 1));
+                };
+                section_line = Some(n + 1);
+                if let Some(col) = flow_key_column(line, key) {
+                    return Some((n + 1, col));
+                }
+            }
+        } else if let (Some(_), Some(key)) = (section_line, second) {
+            if is_key(trimmed, key) {
+                return Some((n + 1, indent + 1));
+            }
+            if let Some(col) = flow_key_column(line, key) {
+                return Some((n + 1, col));
+            }
         }
+    }
+    section_line.map(|l| (l, 1))
+}
+
+/// Whether `trimmed` (a line without its indent) starts with the key `k`.
+fn is_key(trimmed: &str, k: &str) -> bool {
+    trimmed
+        .strip_prefix(k)
+        .is_some_and(|r| r.trim_start().starts_with(':'))
+}
+
+/// The 1-based column of `key:` inside a flow mapping on `line` (after `{` or `,`), before
+/// any comment.
+fn flow_key_column(line: &str, key: &str) -> Option<usize> {
+    let code = line.find(" #").map_or(line, |at| &line[..at]);
+    let mut from = 0;
+    while let Some(at) = code[from..].find(key).map(|i| i + from) {
+        let before = code[..at].trim_end();
+        if (before.ends_with('{') || before.ends_with(',')) && is_key(&code[at..], key) {
+            return Some(code[..at].chars().count() + 1);
+        }
+        from = at + key.len();
     }
     None
 }

@@ -2,18 +2,26 @@
 //! every figure checked. The rest of the program reads only this resolved form.
 //!
 //! The way in: [`Machine::from_yaml_str`] parses the text into the raw form of `schema`,
-//! whose `resolve` fills the defaults of `defaults` and turns the motor's figures into a
-//! force (`motor`); `validate` checks every figure; `location` gives each error its file,
-//! line and column.
+//! whose `resolve` fills the defaults of `defaults`, turns the motor's figures (or a motor
+//! of `motor_table`) into a force (`motor`), and reads the Klipper sections (`klipper`),
+//! the firmware (`marlin`) and the drive (`drive`); `validate` checks every figure; a
+//! profile without `drive` then gets the physical default (`drive`); `location` gives each
+//! error its file, line and column.
 
 pub mod defaults;
+mod drive;
+mod klipper;
 mod location;
+mod marlin;
 mod motor;
+pub mod motor_table;
 mod schema;
 #[cfg(test)]
 pub(crate) mod test_support;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_keys;
 mod validate;
 
 use crate::gcode::ArcRules;
@@ -23,7 +31,10 @@ use std::path::Path;
 
 use crate::delta::{self, DeltaModel};
 
-pub use motor::pulley_pitch_radius_m;
+pub use drive::{DefaultDrive, typical_motor_stiffness_n_m};
+pub use klipper::SHAPER_NAMES;
+pub use marlin::{Firmware, Marlin};
+pub use motor::{motor_stiffness_n_m, pulley_pitch_radius_m};
 
 /// Delta geometry, mm and degrees.
 #[derive(Clone, Debug, PartialEq)]
@@ -78,13 +89,34 @@ pub struct Extruder {
 /// The carriage motors, resolved: the force limit and the rotor seen at the belt.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Motors {
-    /// Allowed peak |Q_i| per carriage, N: given, or holding torque / pulley pitch radius /
-    /// safety factor.
+    /// Allowed peak |Q_i| per carriage at low speed, N: given, or the torque at standstill
+    /// (the holding torque, scaled to the run current when given) / pulley pitch radius /
+    /// safety factor; with a curve, the curve's force below its knee.
     pub max_force_n: f64,
     /// The rotor's inertia reflected to the carriage, J/r² (r the pulley pitch radius), kg;
-    /// 0 when no `rotor_inertia_kg_m2` is given. It adds to the carriage's inertia, not to
-    /// its weight.
+    /// 0 without a rotor inertia (given, or the model's). It adds to the carriage's
+    /// inertia, not to its weight.
     pub reflected_mass_kg: f64,
+    /// The force against carriage speed, when the electrical figures are given; None: the
+    /// force is `max_force_n` at any speed.
+    pub curve: Option<crate::motor::StepperCurve>,
+    /// The motor's magnetic stiffness at the carriage, T·N_r/r², N/m (the torque form);
+    /// None in the `max_force_n` form.
+    pub stiffness_n_m: Option<f64>,
+    /// The motor table's name of the motor (`motors.model`).
+    pub model: Option<&'static str>,
+}
+
+impl Motors {
+    /// The force a motor can give its carriage at `carriage_speed_mm_s` (either sign), N:
+    /// the curve's, or `max_force_n` at any speed.
+    #[inline]
+    pub fn available_force_n(&self, carriage_speed_mm_s: f64) -> f64 {
+        match &self.curve {
+            Some(c) => c.available_force_n(carriage_speed_mm_s),
+            None => self.max_force_n,
+        }
+    }
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -108,8 +140,13 @@ pub struct Machine {
     pub arc_rules: ArcRules,
     /// Klipper's `[input_shaper]`.
     pub input_shaper: InputShaper,
-    /// How the nozzle follows the commanded motion.
+    /// How the nozzle follows the commanded motion: the profile's `drive`, or the physical
+    /// default ([`Machine::default_drive`]).
     pub drive: Drive,
+    /// How the default drive was found; None when the profile gives `drive`.
+    pub drive_default: Option<DefaultDrive>,
+    /// The firmware whose planner the moves follow, with Marlin's settings.
+    pub firmware: Firmware,
 }
 
 /// Why a machine profile cannot be used. The message names the file, the line and column
@@ -167,7 +204,20 @@ impl Machine {
     pub fn from_yaml_str(text: &str, origin: &str) -> Result<Machine, ProfileError> {
         let raw: schema::RawMachine =
             yaml_serde::from_str(text).map_err(|e| location::schema_error(&e, origin))?;
-        let machine = raw.resolve().and_then(|m| validate::check(&m).map(|()| m));
+        let machine = raw.resolve().and_then(|(mut m, drive_given)| {
+            validate::check(&m)?;
+            if !drive_given {
+                let d = m.default_drive().map_err(|e| {
+                    Invalid::new(
+                        "drive",
+                        format!("no `drive` given, and its default cannot be derived: {e}"),
+                    )
+                })?;
+                m.drive = Drive::Spring(d.spring);
+                m.drive_default = Some(d);
+            }
+            Ok(m)
+        });
         machine.map_err(|Invalid { key, message }| ProfileError::Invalid {
             origin: origin.to_string(),
             location: location::locate_key(text, &key),

@@ -3,12 +3,15 @@
 //! geometry form and hands the motors to [`motor::resolve`]. Unknown keys are errors. The
 //! struct names show in the parser's messages ("expected struct RawMasses").
 
-use crate::gcode::ArcRules;
 use crate::motion::drive::Drive;
-use crate::motion::shaper::InputShaper;
 use serde::Deserialize;
 
-use super::{Extruder, Geometry, Invalid, Limits, Machine, Masses, Sampling, defaults, motor};
+use super::drive::RawDrive;
+use super::klipper::{RawGcodeArcs, RawInputShaper};
+use super::marlin::{FirmwareName, Marlin};
+use super::{
+    Extruder, Geometry, Invalid, Limits, Machine, Masses, Sampling, defaults, marlin, motor,
+};
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -24,6 +27,14 @@ pub(super) struct RawMachine {
     sampling: RawSampling,
     #[serde(default = "gravity")]
     gravity_m_s2: f64,
+    #[serde(default)]
+    firmware: FirmwareName,
+    marlin: Option<Marlin>,
+    #[serde(default)]
+    gcode_arcs: RawGcodeArcs,
+    #[serde(default)]
+    input_shaper: RawInputShaper,
+    drive: Option<RawDrive>,
 }
 
 #[derive(Deserialize)]
@@ -97,12 +108,38 @@ impl Default for RawExtruder {
 #[serde(deny_unknown_fields)]
 pub(super) struct RawMotors {
     pub(super) max_force_n: Option<f64>,
+    /// A motor of the table ([`super::motor_table`]): its figures, unless given here.
+    pub(super) model: Option<String>,
     pub(super) holding_torque_nm: Option<f64>,
+    pub(super) rated_current_a: Option<f64>,
+    /// A RMS (Klipper's `run_current`).
+    pub(super) run_current_a: Option<f64>,
+    pub(super) resistance_ohm: Option<f64>,
+    pub(super) inductance_mh: Option<f64>,
+    pub(super) supply_voltage_v: Option<f64>,
+    /// Default: [`defaults::STEP_ANGLE_DEG`].
+    pub(super) step_angle_deg: Option<f64>,
     pub(super) pulley_teeth: Option<u32>,
     /// Default: [`defaults::BELT_PITCH_MM`] (GT2).
     pub(super) belt_pitch_mm: Option<f64>,
+    /// Klipper's `rotation_distance`: belt travel per motor turn, instead of the pulley.
+    pub(super) rotation_distance_mm: Option<f64>,
     pub(super) safety_factor: Option<f64>,
     pub(super) rotor_inertia_kg_m2: Option<f64>,
+}
+
+impl RawMotors {
+    /// The keys only the torque form takes, each with whether the profile gives it.
+    pub(super) fn torque_form_keys(&self) -> [(&'static str, bool); 6] {
+        [
+            ("rated_current_a", self.rated_current_a.is_some()),
+            ("run_current_a", self.run_current_a.is_some()),
+            ("resistance_ohm", self.resistance_ohm.is_some()),
+            ("inductance_mh", self.inductance_mh.is_some()),
+            ("supply_voltage_v", self.supply_voltage_v.is_some()),
+            ("step_angle_deg", self.step_angle_deg.is_some()),
+        ]
+    }
 }
 
 #[derive(Deserialize)]
@@ -202,14 +239,17 @@ impl RawGeometry {
 
 impl RawMachine {
     /// Fills every default; on a bad geometry or motor form returns the key and what is
-    /// wrong. The figures are validated after, on the resolved machine.
-    pub(super) fn resolve(self) -> Result<Machine, Invalid> {
+    /// wrong. The figures are validated after, on the resolved machine. Without `drive`
+    /// the machine's drive is rigid here and `false` is returned: the physical default
+    /// ([`Machine::default_drive`]) needs the validated geometry.
+    pub(super) fn resolve(self) -> Result<(Machine, bool), Invalid> {
         let g = self.geometry;
         let l = self.limits;
         let e = self.extruder;
         let extrude_ratio =
             defaults::extrude_only_ratio(e.nozzle_diameter_mm, e.filament_diameter_mm);
-        Ok(Machine {
+        let drive = self.drive.as_ref().map(RawDrive::resolve).transpose()?;
+        let machine = Machine {
             name: self.name,
             geometry: Geometry {
                 delta_radius_mm: g.delta_radius_mm()?,
@@ -249,9 +289,12 @@ impl RawMachine {
                 period_s: self.sampling.period_s,
             },
             gravity_m_s2: self.gravity_m_s2,
-            arc_rules: ArcRules::default(),
-            input_shaper: InputShaper::default(),
-            drive: Drive::Rigid,
-        })
+            firmware: marlin::resolve(self.firmware, self.marlin)?,
+            arc_rules: self.gcode_arcs.resolve()?,
+            input_shaper: self.input_shaper.resolve()?,
+            drive: drive.unwrap_or(Drive::Rigid),
+            drive_default: None,
+        };
+        Ok((machine, drive.is_some()))
     }
 }

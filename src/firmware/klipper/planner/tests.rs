@@ -45,12 +45,17 @@ pub(super) fn machine() -> Machine {
         motors: Motors {
             max_force_n: 40.0,
             reflected_mass_kg: 0.0,
+            curve: None,
+            stiffness_n_m: None,
+            model: None,
         },
         sampling: Sampling { period_s: 0.001 },
         gravity_m_s2: 9.81,
         arc_rules: crate::gcode::ArcRules::default(),
         input_shaper: crate::motion::shaper::InputShaper::default(),
         drive: crate::motion::drive::Drive::Rigid,
+        drive_default: None,
+        firmware: crate::machine::Firmware::Klipper,
     }
 }
 
