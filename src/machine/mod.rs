@@ -181,14 +181,6 @@ fn fmt_location(location: Option<(usize, usize)>) -> String {
     location.map_or_else(String::new, |(l, c)| format!(":{l}:{c}"))
 }
 
-impl Motors {
-    /// The force a carriage's motor can give at a carriage speed of `speed_mm_s`, N.
-    #[inline(always)]
-    pub fn available_force_n(&self, _speed_mm_s: f64) -> f64 {
-        self.max_force_n
-    }
-}
-
 impl Machine {
     /// Reads and resolves a profile file.
     pub fn load(path: &Path) -> Result<Machine, ProfileError> {
