@@ -87,8 +87,10 @@ fn machine_shows_firmware_arcs_shaper_drive_and_the_motor_curve() {
     assert_eq!(f.len(), 7);
     assert!((f[5].as_f64().unwrap() - 43.3922).abs() < 5e-5);
     assert!((v["motor"]["curve"]["knee_speed_mm_s"].as_f64().unwrap() - 433.76).abs() < 5e-3);
-    // The shipped Kossel: Klipper, no shaper, rigid drive as given, a constant force.
-    let k = repo("machines/kossel.yaml").display().to_string();
+    // The test Kossel: Klipper, no shaper, rigid drive as given, a constant force.
+    let k = repo("tests/fixtures/profiles/kossel-rigid.yaml")
+        .display()
+        .to_string();
     let text = stdout(&run(&["machine", &k]));
     assert!(text.contains("firmware: klipper\n"), "{text}");
     assert!(text.contains("input shaper: x off; y off\n"), "{text}");
@@ -106,6 +108,14 @@ fn machine_shows_firmware_arcs_shaper_drive_and_the_motor_curve() {
         serde_json::Value::Null
     );
     assert_eq!(v["motor"]["curve"]["force_n"][6], 25.0);
+    // The shipped Kossel: its motor's curve, the default drive.
+    let k = repo("machines/kossel.yaml").display().to_string();
+    let text = stdout(&run(&["machine", &k]));
+    assert!(
+        text.contains("drive: spring of 51.23 Hz, damping ratio 0.1 (the default"),
+        "{text}"
+    );
+    assert!(text.contains("motor: motionking-17hs4401"), "{text}");
 }
 
 #[test]

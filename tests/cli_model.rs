@@ -135,8 +135,13 @@ fn machine_prints_the_derived_figures() {
     ] {
         assert!(text.contains(needle), "{needle} in\n{text}");
     }
+    // Off the centre a carriage carries more than at the centre (eq. 15 against eq. 16).
     let v = json_of(&["machine", KOSSEL, "--format", "json"]);
-    assert!(v["max_static_force_n"].as_f64().unwrap() > 2.7);
+    let centre = v["static_force_centre_n"][0].as_f64().unwrap();
+    assert!(
+        v["max_static_force_n"].as_f64().unwrap() > 1.2 * centre,
+        "{v}"
+    );
 }
 
 #[test]

@@ -3,7 +3,7 @@ use super::location::edit_distance;
 use super::*;
 use crate::path::Vec3;
 
-const KOSSEL: &str = include_str!("../../machines/kossel.yaml");
+const KOSSEL: &str = include_str!("../../tests/fixtures/profiles/kossel-rigid.yaml");
 
 fn error_of(text: &str) -> String {
     Machine::from_yaml_str(text, "m.yaml")

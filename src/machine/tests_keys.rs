@@ -4,9 +4,9 @@
 use super::*;
 use crate::motion::shaper::{AxisShaper, ShaperType};
 
-const KOSSEL: &str = include_str!("../../machines/kossel.yaml");
+const KOSSEL: &str = include_str!("../../tests/fixtures/profiles/kossel-rigid.yaml");
 
-/// machines/kossel.yaml without its `drive` (so the physical default applies), followed
+/// The test Kossel (tests/fixtures/profiles/kossel-rigid.yaml) without its `drive` (so the physical default applies), followed
 /// by `extra`.
 fn kossel_with(extra: &str) -> String {
     let mut out = String::new();
@@ -551,7 +551,7 @@ fn motor_errors_name_the_key_and_its_line() {
 
 #[test]
 fn default_drive_of_the_kossel_by_hand() {
-    // machines/kossel.yaml's figures without `drive`, its motor in the torque form
+    // The test Kossel's figures without `drive`, its motor in the torque form
     // (0.4 N·m, 1.8°, GT2 20T; cart 0.22 kg with the rotor folded in, link 0.012 kg,
     // platform 0.10 kg, delta radius 105, arms 215, home z 290):
     //   r = 40 mm / 2π = 6.366198 mm; N_r = 360/(4·1.8) = 50;

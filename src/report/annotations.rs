@@ -7,12 +7,17 @@ use crate::delta::TOWER_NAMES;
 
 /// Where and when a violation happened: `(tower A, decel, t=812.304 s)`.
 pub(super) fn context(v: &Violation) -> String {
-    format!(
-        "(tower {}, {}, t={:.3} s)",
-        TOWER_NAMES[v.tower - 1],
-        v.phase,
-        v.t_s
-    )
+    // A force violation names its tower in its message.
+    if v.available_force_n.is_some() {
+        format!("({}, t={:.3} s)", v.phase, v.t_s)
+    } else {
+        format!(
+            "(tower {}, {}, t={:.3} s)",
+            TOWER_NAMES[v.tower - 1],
+            v.phase,
+            v.t_s
+        )
+    }
 }
 
 /// The annotation lines to insert after each flagged input line.
@@ -71,7 +76,7 @@ mod tests {
         assert_eq!(
             a[&20],
             [
-                "; delta-gcode: OVER force: needs 31.2 N, the motor gives 30.0 N at 120 mm/s (tower A, decel, t=2.500 s)"
+                "; delta-gcode: OVER force: tower A needs 31.2 N, its motor gives 30.0 N at 120 mm/s (decel, t=2.500 s)"
             ]
         );
         assert!(a[&30][0].starts_with(

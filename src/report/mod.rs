@@ -261,8 +261,8 @@ impl Report {
                     t_s: w.t_s,
                     phase: w.phase,
                     message: format!(
-                        "OVER force: needs {:.1} N, the motor gives {:.1} N at {:.0} mm/s",
-                        w.force_n, w.available_n, w.speed_mm_s
+                        "OVER force: tower {} needs {:.1} N, its motor gives {:.1} N at {:.0} mm/s",
+                        TOWER_NAMES[tower], w.force_n, w.available_n, w.speed_mm_s
                     ),
                     command: String::new(),
                 });
@@ -403,7 +403,7 @@ pub(crate) mod tests {
         assert_eq!(r.violations[0].tower, 1);
         assert_eq!(
             r.violations[0].message,
-            "OVER force: needs 31.2 N, the motor gives 30.0 N at 120 mm/s"
+            "OVER force: tower A needs 31.2 N, its motor gives 30.0 N at 120 mm/s"
         );
         assert_eq!(r.violations[0].available_force_n, Some([30.0; 3]));
         assert_eq!(r.summary.peak_use, [31.25 / 30.0, 0.4, 0.4]);

@@ -81,6 +81,10 @@ pub struct MoveStats {
     pub offset_mm: [f64; 3],
 }
 
+/// Below this an available force counts as this (N): the share of a motor with no force
+/// left stays a finite number (for JSON).
+const MIN_AVAILABLE_N: f64 = 1e-3;
+
 /// The instant a tower's motor was asked the largest share of what it can give.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Worst {
@@ -155,9 +159,9 @@ impl MoveStats {
                 let up = q > peak;
                 peak = if up { q } else { peak };
                 peak_at = if up { j } else { peak_at };
-                // No force available (a motor beyond its top speed) and some asked: the
-                // largest finite ratio, a violation.
-                let r = q / a.max(f64::MIN_POSITIVE);
+                // No force available (a motor beyond its top speed) and some asked: a large
+                // finite ratio, a violation.
+                let r = q / a.max(MIN_AVAILABLE_N);
                 let up = r > ratio;
                 ratio = if up { r } else { ratio };
                 ratio_at = if up { j } else { ratio_at };
@@ -295,7 +299,7 @@ mod tests {
         assert_eq!(s.worst[0].ratio, 0.3);
         assert_eq!(s.worst[1].available_n, 0.0);
         assert_eq!((s.worst[1].force_n, s.worst[1].t_s), (1.0, 0.002));
-        assert!(s.worst[1].ratio > 1e300);
+        assert_eq!(s.worst[1].ratio, 1000.0);
         assert_eq!(s.worst[2].ratio, 2.5);
         assert_eq!(s.worst[2].speed_mm_s, 0.03);
         assert_eq!(s.worst_use_tower(), 1);

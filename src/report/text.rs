@@ -5,6 +5,10 @@ use std::io::{self, Write};
 use super::{Report, format_forces};
 use crate::delta::TOWER_NAMES;
 
+/// Shares of the available force beyond this are shown as "more than": a motor past its
+/// top speed has none left, and the share is then meaningless.
+const MAX_SHARE_SHOWN: f64 = 10.0;
+
 /// How many of the worst moves the text report lists.
 const WORST_SHOWN: usize = 10;
 
@@ -46,22 +50,12 @@ pub fn write_text(out: &mut (impl Write + ?Sized), report: &Report) -> io::Resul
             "line", "force A/B/C (N)", "margin", "phase", "t (s)"
         )?;
         for v in worst.iter().take(WORST_SHOWN) {
-            let (margin, what) = if let Some(available) = v.available_force_n {
-                let t = v.tower - 1;
-                (
-                    format!("{:+.1} N", available[t] - v.peak_force_n[t]),
-                    format!(
-                        "tower {}: {}",
-                        TOWER_NAMES[v.tower - 1],
-                        v.command.trim_end()
-                    ),
-                )
-            } else {
-                (
-                    String::from("-"),
-                    format!("{}: {}", v.message, v.command.trim_end()),
-                )
+            let t = v.tower - 1;
+            let margin = match v.available_force_n {
+                Some(available) => format!("{:+.1} N", available[t] - v.peak_force_n[t]),
+                None => String::from("-"),
             };
+            let what = format!("{}: {}", v.message, v.command.trim_end());
             writeln!(
                 out,
                 "  {:>8}  {:<15}  {:>9}  {:<6}  {:>10.3}  {}",
@@ -100,12 +94,16 @@ pub fn write_text(out: &mut (impl Write + ?Sized), report: &Report) -> io::Resul
     let t = (0..3)
         .max_by(|&a, &b| s.peak_use[a].total_cmp(&s.peak_use[b]))
         .unwrap_or(0);
+    // Past its top speed a motor gives nothing: any force is too much.
+    let share = if s.peak_use[t] < MAX_SHARE_SHOWN {
+        format!("at most {:.0}%", 100.0 * s.peak_use[t])
+    } else {
+        format!("more than {:.0}%", 100.0 * MAX_SHARE_SHOWN)
+    };
     writeln!(
         out,
-        "  motor use     at most {:.0}% of the force a motor can give at its speed (tower {}, line {})",
-        100.0 * s.peak_use[t],
-        TOWER_NAMES[t],
-        s.peak_use_line[t]
+        "  motor use     {share} of the force a motor can give at its speed (tower {}, line {})",
+        TOWER_NAMES[t], s.peak_use_line[t]
     )?;
     if s.warnings + s.errors > 0 {
         writeln!(
@@ -137,8 +135,17 @@ mod tests {
         // The unreachable move first, then the force violation with its margin and command.
         assert!(lines[3].trim_start().starts_with("30 "), "{text}");
         assert!(lines[4].contains("-1.2 N"), "{text}");
-        assert!(lines[4].contains("tower A: G1 X10 Y20 F9000"), "{text}");
+        assert!(
+            lines[4].contains(
+                "tower A needs 31.2 N, its motor gives 30.0 N at 120 mm/s: G1 X10 Y20 F9000"
+            ),
+            "{text}"
+        );
         assert!(text.contains("print time    0:00:04 (3.5 s)"), "{text}");
+        assert!(
+            text.contains("motor use     at most 104% of the force a motor can give at its speed (tower A, line 20)"),
+            "{text}"
+        );
     }
 
     #[test]
