@@ -64,7 +64,7 @@ fn machine_shows_firmware_arcs_shaper_drive_and_the_motor_curve() {
     let text = stdout(&o);
     for fragment in [
         "firmware: marlin: 80 steps/mm (E 93), 200 segments/s",
-        "arcs: Klipper's [gcode_arcs], chords of 0.5 mm",
+        "arcs: Marlin's plan_arc, chords of 0.1 to 1 mm, at least 72 a circle",
         "input shaper: x mzv at 40.2 Hz, damping ratio 0.1; y ei at 45.6 Hz, damping ratio 0.1",
         "drive: spring of 51.26 Hz, damping ratio 0.1 (the default: no `drive` in the profile",
         "motor: ldo-42sth48-2004ac, force at carriage speed (current-chopped stepper model), \

@@ -129,7 +129,12 @@ fn cura_header() {
     let src = fixture("cura413_header.gcode");
     let (ev, d, _) = read(&src);
     assert!(errors(&d).is_empty(), "{d:?}");
-    assert!(d.is_empty());
+    // Its `;FLAVOR:Marlin`, read for Klipper: the one warning.
+    assert_eq!(d.len(), 1, "{d:?}");
+    assert!(
+        d[0].message.contains("sliced for the `Marlin` flavour"),
+        "{d:?}"
+    );
     // `G1 F200 E3` on line 27 is an E-only move at 200/60 mm/s.
     let m = ev
         .iter()

@@ -61,6 +61,11 @@ fn finite_event(e: &Event) -> bool {
             .chain(&change.damping_ratio)
             .flatten()
             .all(|v| v.is_finite() && *v >= 0.0),
+        // Every number of a Marlin setting is finite (the Debug form shows NaN and inf).
+        Event::Marlin { change, .. } => {
+            let text = format!("{change:?}");
+            !text.contains("NaN") && !text.contains("inf")
+        }
     }
 }
 

@@ -81,6 +81,11 @@ fn check_event(e: &Event) {
                 assert!(v.is_finite() && v >= 0.0, "{e:?}");
             }
         }
+        // Every number of a Marlin setting is finite (the Debug form shows NaN and inf).
+        Event::Marlin { change, .. } => {
+            let text = format!("{change:?}");
+            assert!(!text.contains("NaN") && !text.contains("inf"), "{e:?}");
+        }
     }
 }
 
@@ -457,7 +462,7 @@ fn any_event() -> impl Strategy<Value = Event> {
     let opt = || proptest::option::of(any_number());
     prop_oneof![
         6 => (line, any_number(), any_number(), 1..1000u64).prop_map(
-            |(path, e_mm, feed_mm_s, line)| Event::Move(Move { line, path, e_mm, feed_mm_s, offset_mm: Vec3::zeros() })
+            |(path, e_mm, feed_mm_s, line)| Event::Move(Move { line, path, e_mm, feed_mm_s, offset_mm: Vec3::zeros(), arc: None })
         ),
         1 => (any_number(), 1..1000u64).prop_map(|(dwell_s, line)| Event::Stop { line, dwell_s }),
         1 => (opt(), opt(), opt(), opt(), 1..1000u64).prop_map(|(v, a, s, m, line)| Event::Limits {

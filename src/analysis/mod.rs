@@ -119,7 +119,7 @@ pub fn sequence<R: Read>(
     let read = gcode::interpret(
         input,
         home,
-        machine.arc_rules,
+        machine.dialect(),
         |event: Event| {
             if let Event::Move(m) = &event {
                 sequencer.check(m);

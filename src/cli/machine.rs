@@ -8,6 +8,7 @@ use serde_json::{Value, json};
 
 use super::common::{Format, text_or_json};
 use delta_gcode::delta::TOWER_NAMES;
+use delta_gcode::gcode::ArcRules;
 use delta_gcode::machine::defaults::{self, SLOW_RATIO};
 use delta_gcode::machine::{DefaultDrive, Firmware, Machine};
 use delta_gcode::motion::drive::Drive;
@@ -194,8 +195,22 @@ fn print_additions(machine: &Machine) {
             );
         }
     }
-    let delta_gcode::gcode::ArcRules::Klipper { resolution_mm } = machine.arc_rules;
-    println!("arcs: Klipper's [gcode_arcs], chords of {resolution_mm} mm");
+    match machine.dialect().arcs {
+        ArcRules::Klipper { resolution_mm } => {
+            println!("arcs: Klipper's [gcode_arcs], chords of {resolution_mm} mm")
+        }
+        ArcRules::Marlin {
+            max_segment_mm,
+            min_segment_mm,
+            min_circle_segments,
+            segments_per_sec,
+            n_arc_correction,
+        } => println!(
+            "arcs: Marlin's plan_arc, chords of {min_segment_mm} to {max_segment_mm} mm, \
+             at least {min_circle_segments} a circle, {segments_per_sec} a second (0: off), \
+             exact every {n_arc_correction}"
+        ),
+    }
     let shaper = |s: Option<AxisShaper>| {
         s.map_or_else(
             || "off".to_string(),
@@ -276,7 +291,10 @@ fn drive_text(machine: &Machine) -> String {
 }
 
 fn arcs_json(machine: &Machine) -> Value {
-    let delta_gcode::gcode::ArcRules::Klipper { resolution_mm } = machine.arc_rules;
+    // The profile's `gcode_arcs` (Klipper's); Marlin's arc settings are in `marlin`.
+    let ArcRules::Klipper { resolution_mm } = machine.arc_rules else {
+        return Value::Null;
+    };
     json!({"resolution_mm": resolution_mm})
 }
 

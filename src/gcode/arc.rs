@@ -1,5 +1,6 @@
 //! G2/G3 as the firmware runs them: cut into straight chords, each an ordinary move.
-//! Klipper's rules are those of klippy/extras/gcode_arcs.py (`planArc`).
+//! Klipper's rules are those of klippy/extras/gcode_arcs.py (`planArc`); Marlin's those of
+//! `plan_arc` (Marlin/src/gcode/motion/G2_G3.cpp, 2.1.2.x): [`MarlinChords`].
 
 use std::f64::consts::TAU;
 
@@ -39,6 +40,20 @@ impl Plane {
 pub enum ArcRules {
     /// Klipper's `[gcode_arcs]`: chords of `resolution` mm (default 1).
     Klipper { resolution_mm: f64 },
+    /// Marlin's `plan_arc` with its `ARC_SUPPORT` settings (the profile's `marlin:`
+    /// section; defaults in `machine::defaults`, `MARLIN_*ARC*`).
+    Marlin {
+        /// `MAX_ARC_SEGMENT_MM`.
+        max_segment_mm: f64,
+        /// `MIN_ARC_SEGMENT_MM`.
+        min_segment_mm: f64,
+        /// `MIN_CIRCLE_SEGMENTS`.
+        min_circle_segments: u32,
+        /// `ARC_SEGMENTS_PER_SEC` (0: not defined).
+        segments_per_sec: f64,
+        /// `N_ARC_CORRECTION`.
+        n_arc_correction: u32,
+    },
 }
 
 /// An arc cut into more chords than this is refused: no printable arc comes near it (a
@@ -155,6 +170,203 @@ impl Iterator for Chords {
         c[b] = self.centre[1] + r_p * sin + r_q * cos;
         c[h] = self.helix_start + i as f64 * self.helix_per_chord;
         Some(c)
+    }
+}
+
+/// One chord of a Marlin arc: its end (before the firmware's clamp), and what the planner's
+/// hint needs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MarlinChord {
+    /// The chord's end, in the coordinates of the arc's start and target.
+    pub end: Vec3,
+    /// 1-based index; the last chord (`index == segments`) ends exactly on the target.
+    pub index: u64,
+}
+
+/// The chords of one arc as Marlin's `plan_arc` cuts them (XY plane, Z helical): the
+/// angular travel from the atan2 of the start and end vectors (a full circle when start and
+/// end coincide), `max(⌊flat / ideal⌋, min_segments)` chords, moved into
+/// [`MIN_ARC_SEGMENT_MM`, `MAX_ARC_SEGMENT_MM`]; the chord ends by a small-angle rotation
+/// (sin θ ≈ θ − θ³/6, cos θ ≈ 1 − θ²/2) corrected exactly every `N_ARC_CORRECTION`-th.
+#[derive(Clone, Copy, Debug)]
+pub struct MarlinChords {
+    centre: [f64; 2],
+    /// The initial radius vector −offset, and the current one.
+    r0: [f64; 2],
+    r: [f64; 2],
+    theta: f64,
+    sin_t: f64,
+    cos_t: f64,
+    z: f64,
+    dz: f64,
+    target: Vec3,
+    radius: f64,
+    flat_mm: f64,
+    segments: u64,
+    n_correction: u32,
+    recalc: u32,
+    next: u64,
+}
+
+/// What Marlin does with one G2/G3.
+#[derive(Clone, Copy, Debug)]
+pub enum MarlinArc {
+    /// Chords to queue.
+    Chords(MarlinChords),
+    /// The arc is too short (under 0.1 µm of arc and no Z): Marlin moves E alone, as a G1.
+    ExtrudeOnly,
+    /// No angle between start and end: nothing is queued, the position is kept.
+    Nothing,
+}
+
+impl MarlinChords {
+    /// `plan_arc(cart, offset, clockwise)` from `start` to `target` with the centre at
+    /// `start.xy + offset`, at `feed_mm_s` (the feed after M220).
+    #[allow(clippy::too_many_arguments)]
+    pub fn plan(
+        start: Vec3,
+        target: Vec3,
+        offset: [f64; 2],
+        clockwise: bool,
+        rules: &ArcRules,
+        feed_mm_s: f64,
+        extrudes: bool,
+    ) -> MarlinArc {
+        let ArcRules::Marlin {
+            max_segment_mm,
+            min_segment_mm,
+            min_circle_segments,
+            segments_per_sec,
+            n_arc_correction,
+        } = *rules
+        else {
+            return MarlinArc::Nothing;
+        };
+        let r0 = [-offset[0], -offset[1]];
+        let radius = r0[0].hypot(r0[1]);
+        let centre = [start.x - r0[0], start.y - r0[1]];
+        let (rt_x, rt_y) = (target.x - centre[0], target.y - centre[1]);
+        let near = |a: f64, b: f64| (a - b).abs() < 1e-6;
+        let (angle, min_segments) = if near(start.x, target.x) && near(start.y, target.y) {
+            (
+                if clockwise { -TAU } else { TAU },
+                min_circle_segments as f64,
+            )
+        } else {
+            let mut a = (r0[0] * rt_y - r0[1] * rt_x).atan2(r0[0] * rt_x + r0[1] * rt_y);
+            if a == 0.0 {
+                return MarlinArc::Nothing;
+            }
+            if a > 0.0 && clockwise {
+                a -= TAU;
+            } else if a < 0.0 && !clockwise {
+                a += TAU;
+            }
+            (a, (min_circle_segments as f64 * a.abs() / TAU).ceil())
+        };
+        let dz = target.z - start.z;
+        let flat_mm = radius * angle.abs();
+        if flat_mm < 1e-4 && dz.abs() < 1e-6 {
+            return if extrudes {
+                MarlinArc::ExtrudeOnly
+            } else {
+                MarlinArc::Nothing
+            };
+        }
+        let ideal = if segments_per_sec > 0.0 {
+            (feed_mm_s / segments_per_sec).clamp(min_segment_mm, max_segment_mm)
+        } else {
+            max_segment_mm
+        };
+        let nominal = (flat_mm / ideal).floor().max(min_segments);
+        let nominal_mm = flat_mm / nominal;
+        let segments = if nominal_mm > max_segment_mm {
+            (flat_mm / max_segment_mm).ceil()
+        } else if nominal_mm < min_segment_mm {
+            (flat_mm / min_segment_mm).floor().max(1.0)
+        } else {
+            nominal
+        };
+        // uint16_t in Marlin; a number beyond it is not a printable arc.
+        let segments = if segments.is_finite() && segments >= 1.0 {
+            segments.min(MAX_CHORDS as f64) as u64
+        } else {
+            1
+        };
+        let theta = angle / segments as f64;
+        let th2 = theta * theta;
+        MarlinArc::Chords(MarlinChords {
+            centre,
+            r0,
+            r: r0,
+            theta,
+            sin_t: theta - th2 * theta / 6.0,
+            cos_t: 1.0 - 0.5 * th2,
+            z: start.z,
+            dz: dz / segments as f64,
+            target,
+            radius,
+            flat_mm,
+            segments,
+            n_correction: n_arc_correction,
+            recalc: n_arc_correction,
+            next: 1,
+        })
+    }
+
+    /// Chords of the arc.
+    pub fn segments(&self) -> u64 {
+        self.segments
+    }
+
+    /// The circle's radius, mm.
+    pub fn radius_mm(&self) -> f64 {
+        self.radius
+    }
+
+    /// The arc's length in the plane (without the helical rise), mm.
+    pub fn flat_mm(&self) -> f64 {
+        self.flat_mm
+    }
+}
+
+impl Iterator for MarlinChords {
+    type Item = MarlinChord;
+
+    fn next(&mut self) -> Option<MarlinChord> {
+        let i = self.next;
+        if i > self.segments {
+            return None;
+        }
+        self.next += 1;
+        if i == self.segments {
+            return Some(MarlinChord {
+                end: self.target,
+                index: i,
+            });
+        }
+        self.recalc -= 1;
+        if self.recalc > 0 {
+            let [a, b] = self.r;
+            self.r = [
+                a * self.cos_t - b * self.sin_t,
+                a * self.sin_t + b * self.cos_t,
+            ];
+        } else {
+            self.recalc = self.n_correction;
+            let (sin, cos) = (i as f64 * self.theta).sin_cos();
+            let [a, b] = self.r0;
+            self.r = [a * cos - b * sin, a * sin + b * cos];
+        }
+        self.z += self.dz;
+        Some(MarlinChord {
+            end: Vec3::new(
+                self.centre[0] + self.r[0],
+                self.centre[1] + self.r[1],
+                self.z,
+            ),
+            index: i,
+        })
     }
 }
 

@@ -16,6 +16,60 @@ pub struct Move {
     pub feed_mm_s: f64,
     /// The G92 offset in force: machine position = the file's coordinates + this, mm.
     pub offset_mm: Vec3,
+    /// A chord of a Marlin arc (its planner reads it as one block, with a hint of the
+    /// arc's remaining length); None for a straight move and for Klipper's chords.
+    pub arc: Option<ArcChord>,
+}
+
+/// Where a chord of a Marlin arc lies in its arc: `plan_arc`'s planner hints.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ArcChord {
+    /// The arc's radius, mm.
+    pub radius_mm: f64,
+    /// The arc's length in its plane after this chord, mm (0 for the last chord).
+    pub remaining_mm: f64,
+}
+
+/// A change of Marlin's motion settings, taking effect for the moves after it (none of
+/// these commands waits for the planner). Towers A, B, C are Marlin's X, Y, Z.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum MarlinChange {
+    /// M201 X Y Z E: the towers' and E's max acceleration, mm/s².
+    MaxAccel([Option<f64>; 4]),
+    /// M203 X Y Z E: the towers' and E's max feedrate, mm/s.
+    MaxFeedrate([Option<f64>; 4]),
+    /// M204: S sets print and travel, then P (print), R (retract), T (travel), mm/s².
+    Accel {
+        print: Option<f64>,
+        retract: Option<f64>,
+        travel: Option<f64>,
+    },
+    /// M205 X Y Z E (classic jerk, mm/s), S (min print feedrate), T (min travel feedrate).
+    /// (B, the min segment time, does nothing on a delta; J is not read with classic jerk.)
+    Jerk {
+        jerk: [Option<f64>; 4],
+        min_feedrate: Option<f64>,
+        min_travel_feedrate: Option<f64>,
+    },
+    /// M665: the delta's settings.
+    Delta(DeltaChange),
+}
+
+/// M665's parameters.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct DeltaChange {
+    /// S: segments per second.
+    pub segments_per_second: Option<f64>,
+    /// L: diagonal rod, mm.
+    pub diagonal_rod_mm: Option<f64>,
+    /// R: delta radius, mm.
+    pub radius_mm: Option<f64>,
+    /// H: delta height, mm (it sets the position at the next G28).
+    pub height_mm: Option<f64>,
+    /// X Y Z: tower angle trims, degrees.
+    pub angle_trim_deg: [Option<f64>; 3],
+    /// A B C: diagonal rod trims, mm.
+    pub rod_trim_mm: [Option<f64>; 3],
 }
 
 /// A change of the planner's limits, taking effect at the line where it stands
@@ -48,6 +102,24 @@ pub enum Event {
         line: u64,
         change: ShaperChange,
     },
+    /// A change of Marlin's settings (the Marlin dialect only).
+    Marlin {
+        line: u64,
+        change: MarlinChange,
+    },
+}
+
+impl Event {
+    /// The G-code line of the event.
+    pub fn line(&self) -> u64 {
+        match self {
+            Event::Move(m) => m.line,
+            Event::Stop { line, .. }
+            | Event::Limits { line, .. }
+            | Event::Shaper { line, .. }
+            | Event::Marlin { line, .. } => *line,
+        }
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]

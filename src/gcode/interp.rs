@@ -6,16 +6,30 @@
 //! factors. Positions in events are machine positions in the bed frame: G92 shifts the
 //! G-code coordinates, not the nozzle. Before any G28 the nozzle is at the home position,
 //! unless a G92 before the first G28 or move says where it is.
+//!
+//! In Marlin's dialect ([`Dialect`]) the same state follows Marlin 2.1.x (gcode.cpp,
+//! motion.cpp): one relative bit per axis, so G90 makes E absolute again (cancelling M83),
+//! M82 after G91 makes E absolute, G91 makes E relative; F ≤ 0 is ignored; a bare G92 does
+//! nothing and G28 clears the G92 offsets; the feed before the first F is 4000 mm/min;
+//! M204 P/R/T, M201, M203, M205 and M665 are Marlin's settings ([`Event::Marlin`]); targets
+//! are clamped by the soft endstops (`apply_motion_limits`: beyond the printable radius x,
+//! y *and z* are scaled), and a target out of reach while unhomed (after M665) or with
+//! soft endstops off (M211 S0) drops the move; arcs are `plan_arc`'s ([`MarlinChords`]),
+//! relative and R-form ones included. Klipper's extended commands are noted once and ignored.
 
-use super::arc::{ArcRules, Chords, Plane};
+use super::arc::{ArcRules, Chords, MarlinArc, MarlinChords, Plane};
+use super::dialect::{self, Dialect, FirmwareKind};
 use super::parse::{Command, ParsedLine, param_f64, parse_line};
 use super::reader::BUFFER_BYTES;
-use super::{Diagnostic, Event, LimitChange, Move, Severity};
+use super::{ArcChord, Diagnostic, Event, LimitChange, MarlinChange, Move, Severity, marlin};
 use crate::motion::shaper::{ShaperChange, ShaperType};
 use crate::path::{Path, Vec3};
 
 /// Feed before the first F, mm/min (Klipper's default speed, 25 mm/s).
 pub const DEFAULT_FEED_MM_MIN: f64 = 1500.0;
+
+/// Marlin's feed before the first F, mm/min (`DEFAULT_FEEDRATE_MM_M`).
+const MARLIN_DEFAULT_FEED_MM_MIN: f64 = crate::machine::defaults::MARLIN_DEFAULT_FEEDRATE_MM_MIN;
 
 /// Firmware retraction (G10/G11). Defaults are Marlin's (`RETRACT_LENGTH` 3 mm at
 /// 45 mm/s, recover 0 mm extra at 8 mm/s), since Klipper's default length is 0;
@@ -76,7 +90,7 @@ pub struct Interpreter {
     feed_mm_min: f64,
     speed_factor: f64,
     plane: Plane,
-    arc_rules: ArcRules,
+    dialect: Dialect,
     retraction: Retraction,
     retracted: bool,
     /// M221: filament per E unit (Klipper's `extrude_factor`).
@@ -84,15 +98,26 @@ pub struct Interpreter {
     /// Where the machine is is known: after the first G28 or move. Before, a G92 says
     /// where the nozzle is instead of shifting coordinates.
     placed: bool,
+    /// Marlin: the axes are homed (G28; M665 un-homes): the soft endstops act only then.
+    homed: bool,
+    /// Marlin: M211 S0/S1.
+    soft_endstops_on: bool,
+    /// Marlin: M220 B.
+    saved_speed_factor: f64,
+    /// A Klipper command has been noted as ignored by Marlin (once per file).
+    klipper_noted: bool,
+    /// A slicer's flavour line has been read (only the first counts).
+    flavour_read: bool,
     stats: ReadStats,
 }
 
 const AXES: [u8; 3] = [b'X', b'Y', b'Z'];
 
 impl Interpreter {
-    /// A fresh interpreter with the nozzle at `home_mm`, G90, M82, G21, G17, arcs cut by
-    /// `arc_rules`.
-    pub fn new(home_mm: Vec3, arc_rules: ArcRules) -> Self {
+    /// A fresh interpreter with the nozzle at `home_mm`, G90, M82, G21, G17, reading as
+    /// `dialect`'s firmware does (a bare [`ArcRules`] is Klipper's dialect).
+    pub fn new(home_mm: Vec3, dialect: impl Into<Dialect>) -> Self {
+        let dialect = dialect.into();
         Interpreter {
             home: home_mm,
             pos: home_mm,
@@ -102,14 +127,22 @@ impl Interpreter {
             absolute: true,
             absolute_e: true,
             unit_mm: 1.0,
-            feed_mm_min: DEFAULT_FEED_MM_MIN,
+            feed_mm_min: match dialect.firmware {
+                FirmwareKind::Klipper => DEFAULT_FEED_MM_MIN,
+                FirmwareKind::Marlin => MARLIN_DEFAULT_FEED_MM_MIN,
+            },
             speed_factor: 1.0,
             plane: Plane::Xy,
-            arc_rules,
+            dialect,
             retraction: Retraction::default(),
             retracted: false,
             extrude_factor: 1.0,
             placed: false,
+            homed: true,
+            soft_endstops_on: true,
+            saved_speed_factor: 1.0,
+            klipper_noted: false,
+            flavour_read: false,
             stats: ReadStats::default(),
         }
     }
@@ -172,6 +205,9 @@ impl Interpreter {
             );
             return;
         }
+        if !self.flavour_read && bytes.first() == Some(&b';') {
+            self.flavour(bytes, d);
+        }
         let p = parse_line(bytes);
         for diag in p.diags() {
             d.push(diag.column, diag.severity, diag.message());
@@ -184,6 +220,43 @@ impl Interpreter {
             on_event,
         };
         self.command(&p, &mut ev, d);
+    }
+
+    fn marlin(&self) -> bool {
+        self.dialect.firmware == FirmwareKind::Marlin
+    }
+
+    /// A slicer's flavour comment (`;FLAVOR:Marlin`, `; gcode_flavor = klipper`): one
+    /// warning when it names another firmware than the profile's.
+    fn flavour(&mut self, bytes: &[u8], d: &mut Diags<impl FnMut(Diagnostic)>) {
+        let Some(flavour) = dialect::slicer_flavour(super::parse::strip_terminator(bytes)) else {
+            return;
+        };
+        self.flavour_read = true;
+        let ours = self.dialect.firmware;
+        if dialect::flavour_firmware(flavour) == Some(ours) {
+            return;
+        }
+        let text = String::from_utf8_lossy(flavour);
+        let what = match ours {
+            FirmwareKind::Klipper => {
+                "the moves are planned as Klipper runs them (Klipper ignores M201, M203 and \
+                 M205, and reads M204 its own way)"
+            }
+            FirmwareKind::Marlin => {
+                "the moves are planned as Marlin runs them (Marlin ignores Klipper's extended \
+                 commands)"
+            }
+        };
+        d.warn(
+            1,
+            format!(
+                "the file was sliced for the `{text}` flavour, but the machine profile's \
+                 firmware is {}: {what}; check the slicer's G-code flavour or the profile's \
+                 `firmware`",
+                ours.name()
+            ),
+        );
     }
 
     fn command(
@@ -205,7 +278,20 @@ impl Interpreter {
                 return;
             }
             Command::Extended { name, .. } => {
-                if name.eq_ignore_ascii_case(b"SET_VELOCITY_LIMIT") {
+                if self.marlin() {
+                    self.stats.unknown_commands += 1;
+                    if !self.klipper_noted {
+                        self.klipper_noted = true;
+                        d.warn(
+                            1,
+                            format!(
+                                "{} is Klipper's: Marlin ignores it (and the other extended \
+                                 commands of this file, not noted again)",
+                                String::from_utf8_lossy(name)
+                            ),
+                        );
+                    }
+                } else if name.eq_ignore_ascii_case(b"SET_VELOCITY_LIMIT") {
                     let change = set_velocity_limit(p, d);
                     self.limits(change, ev);
                 } else if name.eq_ignore_ascii_case(b"SET_INPUT_SHAPER") {
@@ -226,8 +312,10 @@ impl Interpreter {
                 return;
             }
         };
+        let marlin = self.marlin();
         match (letter, number) {
             (b'G', 0 | 1) => self.linear(p, ev, d),
+            (b'G', 2 | 3) if marlin => self.marlin_arc(p, number == 2, column, ev, d),
             (b'G', 2 | 3) => self.arc(p, number == 2, column, ev, d),
             (b'G', 4) => {
                 let dwell_s = match (p.word(b'S'), p.word(b'P')) {
@@ -260,6 +348,8 @@ impl Interpreter {
                     self.extrude_only(e, r.unretract_speed_mm_s * self.speed_factor, ev);
                 }
             }
+            // Marlin's arcs are in XY (CNC_WORKSPACE_PLANES is off by default).
+            (b'G', 17..=19) if marlin => self.stats.unknown_commands += 1,
             (b'G', 17) => self.plane = Plane::Xy,
             (b'G', 18) => self.plane = Plane::Xz,
             (b'G', 19) => self.plane = Plane::Yz,
@@ -269,17 +359,80 @@ impl Interpreter {
                 self.stop(0.0, ev);
                 self.pos = self.home;
                 self.placed = true;
+                if marlin {
+                    // G28 clears the homed axes' position_shift; the machine is homed.
+                    self.offset = Vec3::zeros();
+                    self.homed = true;
+                }
             }
-            (b'G', 90) => self.absolute = true,
-            (b'G', 91) => self.absolute = false,
+            (b'G', 90) => {
+                self.absolute = true;
+                if marlin {
+                    // Marlin clears every relative bit, E's (set by M83) too.
+                    self.absolute_e = true;
+                }
+            }
+            (b'G', 91) => {
+                self.absolute = false;
+                if marlin {
+                    self.absolute_e = false;
+                }
+            }
             (b'G', 92) => self.set_position(p),
             (b'M', 82) => self.absolute_e = true,
             (b'M', 83) => self.absolute_e = false,
+            (b'M', 201 | 203) if marlin => {
+                let change = marlin::axis_limits(p, number == 203, self.unit_mm, d);
+                self.marlin_change(change, ev);
+            }
+            (b'M', 204) if marlin => {
+                let change = marlin::m204(p, self.unit_mm, d);
+                self.marlin_change(change, ev);
+            }
+            (b'M', 205) if marlin => {
+                let change = marlin::m205(p, self.unit_mm, d);
+                self.marlin_change(change, ev);
+            }
+            (b'M', 665) if marlin => {
+                let change = marlin::m665(p, self.unit_mm, d);
+                self.marlin_change(Some(MarlinChange::Delta(change)), ev);
+                if self.homed {
+                    self.homed = false;
+                    d.warn(
+                        column,
+                        "M665 un-homes Marlin: until the next G28 moves are not clamped to the \
+                         printable radius, a move out of it is dropped, and with \
+                         NO_MOTION_BEFORE_HOMING (the FLSUN Q5's configuration) every move is \
+                         refused"
+                            .into(),
+                    );
+                }
+            }
+            (b'M', 211) if marlin => {
+                if let Some(s) = p.value(b'S') {
+                    self.soft_endstops_on = s != 0.0;
+                }
+            }
             (b'M', 204) => {
                 let change = m204(p, column, d);
                 self.limits(change, ev);
             }
             (b'M', 207 | 208) => self.m207_m208(p, number == 207),
+            (b'M', 220) if marlin => {
+                // Marlin: B backs the factor up, R restores it, S sets it; alone it reports.
+                if p.word(b'B').is_some() {
+                    self.saved_speed_factor = self.speed_factor;
+                }
+                if p.word(b'R').is_some() {
+                    self.speed_factor = self.saved_speed_factor;
+                }
+                if let Some(w) = p.word(b'S') {
+                    match w.value {
+                        Some(v) if v > 0.0 => self.speed_factor = v / 100.0,
+                        _ => d.error(w.column, "M220 S must be a positive percentage".into()),
+                    }
+                }
+            }
             (b'M', 220) => match p.word(b'S') {
                 None => self.speed_factor = 1.0,
                 Some(w) => match w.value {
@@ -288,9 +441,12 @@ impl Interpreter {
                 },
             },
             // M400, and the heater waits: Klipper's wait_for_temperature asks the toolhead
-            // for its last move time, which flushes the lookahead.
+            // for its last move time, which flushes the lookahead. (Marlin's M109/M190 do not
+            // wait for the planner, but no line is read until the heater is ready: the queue
+            // runs empty, which is the same.)
             (b'M', 400 | 109 | 190) => self.stop(0.0, ev),
             (b'M', 221) => match p.word(b'S') {
+                None if marlin => {}
                 None => self.extrude_factor = 1.0,
                 Some(w) => match w.value {
                     Some(v) if v > 0.0 => self.extrude_factor = v / 100.0,
@@ -298,6 +454,16 @@ impl Interpreter {
                 },
             },
             _ => self.stats.unknown_commands += 1,
+        }
+    }
+
+    fn marlin_change(&mut self, change: Option<MarlinChange>, ev: &mut Events<impl FnMut(Event)>) {
+        if let Some(change) = change {
+            self.stats.limit_changes += 1;
+            (ev.on_event)(Event::Marlin {
+                line: ev.line,
+                change,
+            });
         }
     }
 
@@ -326,6 +492,17 @@ impl Interpreter {
         feed_mm_s: f64,
         ev: &mut Events<impl FnMut(Event)>,
     ) {
+        self.send_chord(path, e_mm, feed_mm_s, None, ev);
+    }
+
+    fn send_chord(
+        &mut self,
+        path: Path,
+        e_mm: f64,
+        feed_mm_s: f64,
+        arc: Option<ArcChord>,
+        ev: &mut Events<impl FnMut(Event)>,
+    ) {
         self.stats.moves += 1;
         self.placed = true;
         (ev.on_event)(Event::Move(Move {
@@ -334,6 +511,7 @@ impl Interpreter {
             e_mm,
             feed_mm_s,
             offset_mm: self.offset,
+            arc,
         }));
     }
 
@@ -350,6 +528,11 @@ impl Interpreter {
         if let Some(w) = p.word(b'F') {
             match w.value {
                 Some(f) if f > 0.0 => self.feed_mm_min = f * self.unit_mm,
+                _ if self.marlin() => d.warn(
+                    w.column,
+                    "F must be a positive speed: Marlin ignores it and keeps the previous feed"
+                        .into(),
+                ),
                 _ => d.error(
                     w.column,
                     "F must be a positive speed (Klipper stops on it); the previous feed is kept"
@@ -385,7 +568,10 @@ impl Interpreter {
             return 0.0;
         };
         let v = v * self.unit_mm;
-        let e = if self.absolute && self.absolute_e {
+        // Klipper: E is relative under G91 or M83. Marlin: E has its own relative bit, which
+        // G90/G91 and M82/M83 set, the last one winning.
+        let absolute = self.absolute_e && (self.absolute || self.marlin());
+        let e = if absolute {
             v + self.e_offset - self.e_pos
         } else {
             v
@@ -402,11 +588,166 @@ impl Interpreter {
     ) {
         self.feed(p, d);
         let target = self.target(p, d);
+        let e_before = self.e_pos;
         let e = self.extrusion(p, d);
+        let target = if self.marlin() {
+            let clamped = self.apply_motion_limits(target, d);
+            // The segmenter refuses a target out of reach (the soft endstops off, or not
+            // homed), E included; a move without XY change skips the check.
+            let moves_xy = clamped.x != self.pos.x || clamped.y != self.pos.y;
+            if moves_xy && !self.reachable(clamped) {
+                d.warn(
+                    1,
+                    format!(
+                        "the target ({:.3}, {:.3}) is outside Marlin's printable radius and the \
+                         soft endstops do not act ({}): Marlin drops the move, E included",
+                        clamped.x,
+                        clamped.y,
+                        if self.homed {
+                            "M211 S0"
+                        } else {
+                            "not homed since M665"
+                        }
+                    ),
+                );
+                self.e_pos = e_before;
+                return;
+            }
+            clamped
+        } else {
+            target
+        };
         if target != self.pos || e != 0.0 {
             let feed = self.feed_mm_s();
             self.send_move(Path::line(self.pos, target), e, feed, ev);
             self.pos = target;
+        }
+    }
+
+    /// Marlin's `apply_motion_limits` with soft endstops on and the machine homed: beyond
+    /// the printable radius the target's x, y and z are scaled by radius / r (Z too, as
+    /// Marlin does), then z is kept in [0, max z]. A warning when it changes the target.
+    fn apply_motion_limits(&self, t: Vec3, d: &mut Diags<impl FnMut(Diagnostic)>) -> Vec3 {
+        let Some(soft) = self.dialect.soft_endstops else {
+            return t;
+        };
+        if !(self.soft_endstops_on && self.homed) {
+            return t;
+        }
+        let mut c = t;
+        let r2 = t.x * t.x + t.y * t.y;
+        if r2 > soft.radius_mm * soft.radius_mm {
+            c *= soft.radius_mm / r2.sqrt();
+        }
+        c.z = c.z.clamp(0.0, soft.max_z_mm);
+        if c != t {
+            d.warn(
+                1,
+                format!(
+                    "the target ({:.3}, {:.3}, {:.3}) is outside Marlin's soft endstops \
+                     (printable radius {} mm, Z 0 to {} mm): Marlin moves to ({:.3}, {:.3}, \
+                     {:.3}) instead (beyond the radius it scales X, Y and Z alike)",
+                    t.x, t.y, t.z, soft.radius_mm, soft.max_z_mm, c.x, c.y, c.z
+                ),
+            );
+        }
+        c
+    }
+
+    /// Marlin's `position_is_reachable` on a delta: within the printable radius (+0.1 µm).
+    fn reachable(&self, t: Vec3) -> bool {
+        self.dialect
+            .soft_endstops
+            .is_none_or(|s| (t.x * t.x + t.y * t.y) <= (s.radius_mm + 1e-4).powi(2))
+    }
+
+    /// G2/G3 as Marlin's `G2_G3` and `plan_arc` run them: the destination as for G1 (G91
+    /// and M83 allowed), the centre from R (the nearer centre; negative R the farther) or
+    /// from I and J; chords of [`MarlinChords`], each clamped by the soft endstops, each
+    /// with its share of E and the planner's hint; the position ends on the unclamped
+    /// target, as Marlin's does.
+    fn marlin_arc(
+        &mut self,
+        p: &ParsedLine,
+        clockwise: bool,
+        column: u32,
+        ev: &mut Events<impl FnMut(Event)>,
+        d: &mut Diags<impl FnMut(Diagnostic)>,
+    ) {
+        self.feed(p, d);
+        let target = self.target(p, d);
+        let start = self.pos;
+        let mut offset = [0.0, 0.0];
+        if let Some(r) = p.word(b'R').and_then(|w| w.value) {
+            let r = r * self.unit_mm;
+            if r != 0.0 && (start.x != target.x || start.y != target.y) {
+                let d2 = [(target.x - start.x) * 0.5, (target.y - start.y) * 0.5];
+                let e = if clockwise ^ (r < 0.0) { -1.0 } else { 1.0 };
+                let len = d2[0].hypot(d2[1]);
+                let h2 = (r - len) * (r + len);
+                let h = if h2 >= 0.0 { h2.sqrt() } else { 0.0 };
+                offset = [d2[0] - d2[1] / len * e * h, d2[1] + d2[0] / len * e * h];
+            }
+        } else {
+            offset = [
+                p.value(b'I').unwrap_or(0.0) * self.unit_mm,
+                p.value(b'J').unwrap_or(0.0) * self.unit_mm,
+            ];
+        }
+        if offset == [0.0, 0.0] || !(offset[0].is_finite() && offset[1].is_finite()) {
+            d.error(
+                column,
+                "G2/G3: Bad parameters (Marlin refuses the arc: it needs a centre offset I/J or \
+                 a radius R)"
+                    .into(),
+            );
+            return;
+        }
+        if let Some(w) = p.word(b'P') {
+            d.warn(
+                w.column,
+                "P (whole circles) is ignored (Marlin's ARC_P_CIRCLES is off by default)".into(),
+            );
+        }
+        let e_before = self.e_pos;
+        let e_total = self.extrusion(p, d);
+        let feed = self.feed_mm_s();
+        match MarlinChords::plan(
+            start,
+            target,
+            offset,
+            clockwise,
+            &self.dialect.arcs,
+            feed,
+            e_total != 0.0,
+        ) {
+            MarlinArc::Nothing => self.e_pos = e_before,
+            MarlinArc::ExtrudeOnly => {
+                self.stats.arcs += 1;
+                self.send_move(Path::line(start, target), e_total, feed, ev);
+                self.pos = target;
+            }
+            MarlinArc::Chords(chords) => {
+                self.stats.arcs += 1;
+                let n = chords.segments();
+                let (radius, flat) = (chords.radius_mm(), chords.flat_mm());
+                let e_per_chord = e_total / n as f64;
+                for c in chords {
+                    let to = self.apply_motion_limits(c.end, d);
+                    let remaining_mm = if c.index == n {
+                        0.0
+                    } else {
+                        flat - c.index as f64 * (flat / n as f64)
+                    };
+                    let hint = ArcChord {
+                        radius_mm: radius,
+                        remaining_mm,
+                    };
+                    self.send_chord(Path::line(self.pos, to), e_per_chord, feed, Some(hint), ev);
+                    self.pos = to;
+                }
+                self.pos = target;
+            }
         }
     }
 
@@ -421,7 +762,9 @@ impl Interpreter {
         ev: &mut Events<impl FnMut(Event)>,
         d: &mut Diags<impl FnMut(Diagnostic)>,
     ) {
-        let ArcRules::Klipper { resolution_mm } = self.arc_rules;
+        let ArcRules::Klipper { resolution_mm } = self.dialect.arcs else {
+            return;
+        };
         if !self.absolute {
             d.error(
                 column,
@@ -495,7 +838,8 @@ impl Interpreter {
     fn set_position(&mut self, p: &ParsedLine) {
         let given: [Option<f64>; 3] = AXES.map(|a| p.value(a).map(|v| v * self.unit_mm));
         let e = p.value(b'E').map(|v| v * self.unit_mm);
-        let bare = given.iter().all(Option::is_none) && e.is_none();
+        // Klipper zeroes every axis on a bare G92; Marlin does nothing.
+        let bare = given.iter().all(Option::is_none) && e.is_none() && !self.marlin();
         for (i, v) in given.into_iter().enumerate() {
             let v = if bare { Some(0.0) } else { v };
             if let Some(v) = v {
@@ -655,7 +999,7 @@ struct Events<'a, F> {
 }
 
 /// Where diagnostics of the current line go; counts them.
-struct Diags<'a, F> {
+pub(super) struct Diags<'a, F> {
     line: u64,
     on_diag: &'a mut F,
     warnings: u64,
@@ -676,11 +1020,11 @@ impl<F: FnMut(Diagnostic)> Diags<'_, F> {
         });
     }
 
-    fn warn(&mut self, column: u32, message: String) {
+    pub(super) fn warn(&mut self, column: u32, message: String) {
         self.push(column, Severity::Warning, message);
     }
 
-    fn error(&mut self, column: u32, message: String) {
+    pub(super) fn error(&mut self, column: u32, message: String) {
         self.push(column, Severity::Error, message);
     }
 }

@@ -2,15 +2,20 @@
 //! interpreter that turns lines into [`Event`]s for the planner.
 
 pub mod arc;
+pub mod dialect;
 mod event;
 mod interp;
+mod marlin;
 pub mod parse;
 pub mod reader;
 
 use std::io::Read;
 
 pub use arc::{ArcRules, Plane};
-pub use event::{Diagnostic, Event, LimitChange, Move, Severity};
+pub use dialect::{Dialect, FirmwareKind, SoftEndstops};
+pub use event::{
+    ArcChord, DeltaChange, Diagnostic, Event, LimitChange, MarlinChange, Move, Severity,
+};
 pub use interp::{DEFAULT_FEED_MM_MIN, Interpreter, ReadStats, Retraction};
 pub use parse::{Command, ParsedLine, Word, parse_line};
 pub use reader::{ChunkReader, Line, LineReader};
@@ -18,18 +23,19 @@ pub use reader::{ChunkReader, Line, LineReader};
 use crate::path::Vec3;
 
 /// Reads G-code from `input` line by line and interprets it, nozzle starting at
-/// `home_mm` (the position after G28: `(0, 0, home_z)`), arcs cut by `arc_rules`. Events
-/// and diagnostics go to the callbacks in line order; the counts come back at the end.
-/// Only I/O fails.
+/// `home_mm` (the position after G28: `(0, 0, home_z)`), as the firmware of `dialect` reads
+/// it (`Machine::dialect()`; a bare [`ArcRules`] is Klipper's dialect with those arcs).
+/// Events and diagnostics go to the callbacks in line order; the counts come back at the
+/// end. Only I/O fails.
 pub fn interpret<R: Read>(
     input: R,
     home_mm: Vec3,
-    arc_rules: ArcRules,
+    dialect: impl Into<Dialect>,
     mut on_event: impl FnMut(Event),
     mut on_diag: impl FnMut(Diagnostic),
 ) -> std::io::Result<ReadStats> {
     let mut reader = LineReader::new(input);
-    let mut interp = Interpreter::new(home_mm, arc_rules);
+    let mut interp = Interpreter::new(home_mm, dialect);
     while let Some(line) = reader.next_line()? {
         interp.line(
             line.number,

@@ -138,3 +138,30 @@ pub const MARLIN_MIN_STEPS_PER_SEGMENT: u32 = 6;
 pub const MARLIN_MIN_SEGMENT_TIME_US: u32 = 20_000;
 /// `MINIMUM_PLANNER_SPEED` (Configuration_adv.h), mm/s: 0.05.
 pub const MARLIN_MINIMUM_PLANNER_SPEED_MM_S: f64 = 0.05;
+/// `DEFAULT_MINIMUMFEEDRATE` (M205 S), mm/s: 0.
+pub const MARLIN_MIN_FEEDRATE_MM_S: f64 = 0.0;
+/// `DEFAULT_MINTRAVELFEEDRATE` (M205 T), mm/s: 0.
+pub const MARLIN_MIN_TRAVEL_FEEDRATE_MM_S: f64 = 0.0;
+/// `AUTO_BED_LEVELING_UBL` (Configuration.h): off. With it, a delta's moves are cut by UBL's
+/// segmenter (`line_to_destination_segmented`) instead of the plain one.
+pub const MARLIN_UBL: bool = false;
+/// `MAX_ARC_SEGMENT_MM` (Configuration_adv.h, `ARC_SUPPORT`), mm: 1.0.
+pub const MARLIN_MAX_ARC_SEGMENT_MM: f64 = 1.0;
+/// `MIN_ARC_SEGMENT_MM`, mm: 0.1.
+pub const MARLIN_MIN_ARC_SEGMENT_MM: f64 = 0.1;
+/// `MIN_CIRCLE_SEGMENTS`: 72 chords in a full circle at least.
+pub const MARLIN_MIN_CIRCLE_SEGMENTS: u32 = 72;
+/// `ARC_SEGMENTS_PER_SEC`: off (commented out, 50), written 0.
+pub const MARLIN_ARC_SEGMENTS_PER_SEC: f64 = 0.0;
+/// `N_ARC_CORRECTION`: every 25th chord end is computed exactly, the others by a small-angle
+/// rotation.
+pub const MARLIN_N_ARC_CORRECTION: u32 = 25;
+/// `DEFAULT_FEEDRATE_MM_M` (motion.cpp, when the configuration does not define it): the feed
+/// before the first F, mm/min.
+pub const MARLIN_DEFAULT_FEEDRATE_MM_MIN: f64 = 4000.0;
+/// `MINIMAL_STEP_RATE` (planner.cpp, a hard `#define` in 2.1.2.x): the lowest initial and
+/// final step rate of a block, steps/s.
+pub const MARLIN_MINIMAL_STEP_RATE: u32 = 120;
+/// `STEPPER_TIMER_RATE`, ticks/s: 2 MHz on AVR (16 MHz / 8) and on the STM32 HAL (the FLSUN Q5's
+/// `mks_robin_nano_v1v2` build, the Kossel's ATmega2560). The stepper's intervals are whole ticks.
+pub const MARLIN_STEPPER_TIMER_RATE_HZ: u32 = 2_000_000;

@@ -6,6 +6,7 @@ use serde::{Deserialize, Serialize};
 
 use super::validate::Range;
 use super::{Invalid, defaults};
+use crate::gcode::ArcRules;
 
 /// The firmware whose planner the moves follow.
 #[derive(Clone, Debug, PartialEq)]
@@ -60,6 +61,33 @@ pub struct Marlin {
     pub min_segment_time_us: u32,
     /// `MINIMUM_PLANNER_SPEED`, mm/s.
     pub minimum_planner_speed_mm_s: f64,
+    /// `AUTO_BED_LEVELING_UBL`: moves are cut by UBL's segmenter (the XY length, rounded,
+    /// segments of at least 0.1 mm) instead of the plain delta segmenter.
+    pub ubl: bool,
+    /// `MAX_ARC_SEGMENT_MM`: the longest chord of a G2/G3, mm.
+    pub max_arc_segment_mm: f64,
+    /// `MIN_ARC_SEGMENT_MM`: the shortest chord, mm.
+    pub min_arc_segment_mm: f64,
+    /// `MIN_CIRCLE_SEGMENTS`: chords in a full circle at least.
+    pub min_circle_segments: u32,
+    /// `ARC_SEGMENTS_PER_SEC`: chords per second at the feed (0: off, chords of
+    /// `max_arc_segment_mm`).
+    pub arc_segments_per_sec: f64,
+    /// `N_ARC_CORRECTION`: every N-th chord end is computed exactly.
+    pub n_arc_correction: u32,
+}
+
+impl Marlin {
+    /// `plan_arc`'s settings.
+    pub fn arc_rules(&self) -> ArcRules {
+        ArcRules::Marlin {
+            max_segment_mm: self.max_arc_segment_mm,
+            min_segment_mm: self.min_arc_segment_mm,
+            min_circle_segments: self.min_circle_segments,
+            segments_per_sec: self.arc_segments_per_sec,
+            n_arc_correction: self.n_arc_correction,
+        }
+    }
 }
 
 impl Default for Marlin {
@@ -79,6 +107,12 @@ impl Default for Marlin {
             min_steps_per_segment: defaults::MARLIN_MIN_STEPS_PER_SEGMENT,
             min_segment_time_us: defaults::MARLIN_MIN_SEGMENT_TIME_US,
             minimum_planner_speed_mm_s: defaults::MARLIN_MINIMUM_PLANNER_SPEED_MM_S,
+            ubl: defaults::MARLIN_UBL,
+            max_arc_segment_mm: defaults::MARLIN_MAX_ARC_SEGMENT_MM,
+            min_arc_segment_mm: defaults::MARLIN_MIN_ARC_SEGMENT_MM,
+            min_circle_segments: defaults::MARLIN_MIN_CIRCLE_SEGMENTS,
+            arc_segments_per_sec: defaults::MARLIN_ARC_SEGMENTS_PER_SEC,
+            n_arc_correction: defaults::MARLIN_N_ARC_CORRECTION,
         }
     }
 }
@@ -131,6 +165,13 @@ fn check(m: &Marlin) -> Result<(), Invalid> {
             m.minimum_planner_speed_mm_s,
             Range::NonNegative,
         ),
+        ("max_arc_segment_mm", m.max_arc_segment_mm, Range::Positive),
+        ("min_arc_segment_mm", m.min_arc_segment_mm, Range::Positive),
+        (
+            "arc_segments_per_sec",
+            m.arc_segments_per_sec,
+            Range::NonNegative,
+        ),
     ];
     for (key, v, range) in scalars {
         range.check(&format!("marlin.{key}"), v)?;
@@ -151,6 +192,23 @@ fn check(m: &Marlin) -> Result<(), Invalid> {
             "marlin.block_buffer_size",
             format!("expected a power of 2 up to 64 (Marlin's rule), found {b}"),
         ));
+    }
+    if m.min_arc_segment_mm > m.max_arc_segment_mm {
+        return Err(Invalid::new(
+            "marlin.min_arc_segment_mm",
+            format!(
+                "expected at most max_arc_segment_mm ({}), found {}",
+                m.max_arc_segment_mm, m.min_arc_segment_mm
+            ),
+        ));
+    }
+    for (key, v) in [
+        ("min_circle_segments", m.min_circle_segments),
+        ("n_arc_correction", m.n_arc_correction),
+    ] {
+        if v == 0 {
+            return Err(Invalid::new(format!("marlin.{key}"), "expected at least 1"));
+        }
     }
     if m.min_steps_per_segment == 0 {
         return Err(Invalid::new(

@@ -24,7 +24,7 @@ mod tests;
 mod tests_keys;
 mod validate;
 
-use crate::gcode::ArcRules;
+use crate::gcode::{ArcRules, Dialect, FirmwareKind, SoftEndstops};
 use crate::motion::drive::Drive;
 use crate::motion::shaper::InputShaper;
 use std::path::Path;
@@ -238,6 +238,23 @@ impl Machine {
             },
             self.gravity_m_s2,
         )
+    }
+
+    /// How the interpreter reads G-code for this machine: Klipper's dialect with the
+    /// profile's `gcode_arcs`, or Marlin's with its `ARC_SUPPORT` settings and its soft
+    /// endstops (the printable radius, Z up to the home height).
+    pub fn dialect(&self) -> Dialect {
+        match &self.firmware {
+            Firmware::Klipper => Dialect::klipper(self.arc_rules),
+            Firmware::Marlin(m) => Dialect {
+                firmware: FirmwareKind::Marlin,
+                arcs: m.arc_rules(),
+                soft_endstops: Some(SoftEndstops {
+                    radius_mm: self.geometry.print_radius_mm,
+                    max_z_mm: self.geometry.home_z_mm,
+                }),
+            },
+        }
     }
 
     /// Klipper's delta edge limit ([`defaults::edge_radius_mm`], with the shortest arm): the

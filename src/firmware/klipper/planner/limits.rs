@@ -214,6 +214,7 @@ mod tests {
             e_mm: 1.0,
             feed_mm_s: 10.0,
             offset_mm: crate::path::Vec3::zeros(),
+            arc: None,
         };
         let p = crate::path::Vec3::new(0.0, 0.0, 10.0);
         let far = crate::path::Vec3::new(f64::INFINITY, 0.0, 10.0);

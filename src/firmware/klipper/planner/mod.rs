@@ -83,6 +83,9 @@ impl Planner {
             Event::Limits { change, .. } => self.limits.apply(&change),
             // The shaper acts after planning; the Stop before it has flushed the lookahead.
             Event::Shaper { .. } => {}
+            // Marlin's settings do not reach Klipper (the interpreter emits them only in
+            // Marlin's dialect).
+            Event::Marlin { .. } => {}
         }
     }
 

@@ -70,6 +70,7 @@ fn mv(line: u64, path: Path, e_mm: f64, feed_mm_s: f64) -> Event {
         e_mm,
         feed_mm_s,
         offset_mm: Vec3::zeros(),
+        arc: None,
     })
 }
 
