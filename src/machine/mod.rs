@@ -51,6 +51,9 @@ pub struct Geometry {
     /// Nozzle z after G28 at x = y = 0.
     pub home_z_mm: f64,
     pub print_radius_mm: f64,
+    /// Magnetic ball joints: the pull at which one parallelogram's joints let go (both
+    /// rods together), N. None: the arms do not come off.
+    pub arm_magnet_hold_n: Option<f64>,
 }
 
 /// Lumped masses of Fig. 2, kg.

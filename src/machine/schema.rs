@@ -50,6 +50,7 @@ struct RawGeometry {
     tower_angles_deg: [f64; 3],
     home_z_mm: f64,
     print_radius_mm: f64,
+    arm_magnet_hold_n: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -258,6 +259,7 @@ impl RawMachine {
                 tower_angles_deg: g.tower_angles_deg,
                 home_z_mm: g.home_z_mm,
                 print_radius_mm: g.print_radius_mm,
+                arm_magnet_hold_n: g.arm_magnet_hold_n,
             },
             masses: Masses {
                 cart_kg: self.masses.cart_kg,

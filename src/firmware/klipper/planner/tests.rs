@@ -20,6 +20,7 @@ pub(super) fn machine() -> Machine {
             tower_angles_deg: [210.0, 330.0, 90.0],
             home_z_mm: 280.0,
             print_radius_mm: 85.0,
+            arm_magnet_hold_n: None,
         },
         masses: Masses {
             cart_kg: 0.25,
