@@ -451,7 +451,11 @@ pub(crate) mod tests {
         r.add_move(&m);
         let v = &r.violations[0];
         assert_eq!((v.kind, v.tower, v.line), (ViolationKind::ArmTension, 2, 5));
-        assert!(v.message.contains("tower B's arms pull 21.5 N"), "{}", v.message);
+        assert!(
+            v.message.contains("tower B's arms pull 21.5 N"),
+            "{}",
+            v.message
+        );
         assert_eq!(r.summary.peak_tension_n, [10.0, 21.5, 12.0]);
         // Within the hold, or no magnets: nothing.
         let mut ok = Report::new("part.gcode", "Q5", 30.0, false);
