@@ -73,6 +73,9 @@ pub struct Limits {
     pub max_accel_mm_s2: f64,
     pub square_corner_velocity_mm_s: f64,
     pub minimum_cruise_ratio: f64,
+    /// Klipper before 2024 (v0.12 and older): its `max_accel_to_decel`, mm/s², used
+    /// instead of `minimum_cruise_ratio` and kept when ACCEL changes; None for Klipper since.
+    pub max_accel_to_decel_mm_s2: Option<f64>,
     pub max_z_velocity_mm_s: f64,
     pub max_z_accel_mm_s2: f64,
     /// Klipper's delta edge limits (half / quarter speed near the edge).

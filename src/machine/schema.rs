@@ -70,6 +70,7 @@ struct RawLimits {
     square_corner_velocity_mm_s: f64,
     #[serde(default = "minimum_cruise_ratio")]
     minimum_cruise_ratio: f64,
+    max_accel_to_decel_mm_s2: Option<f64>,
     /// Klipper's default: `max_velocity_mm_s`.
     max_z_velocity_mm_s: Option<f64>,
     /// Klipper's default: `max_accel_mm_s2`.
@@ -271,6 +272,7 @@ impl RawMachine {
                 max_accel_mm_s2: l.max_accel_mm_s2,
                 square_corner_velocity_mm_s: l.square_corner_velocity_mm_s,
                 minimum_cruise_ratio: l.minimum_cruise_ratio,
+                max_accel_to_decel_mm_s2: l.max_accel_to_decel_mm_s2,
                 max_z_velocity_mm_s: l.max_z_velocity_mm_s.unwrap_or(l.max_velocity_mm_s),
                 max_z_accel_mm_s2: l.max_z_accel_mm_s2.unwrap_or(l.max_accel_mm_s2),
                 edge_slowdown: l.edge_slowdown,
