@@ -6,9 +6,10 @@
 //! [`for_machine`].
 
 pub mod klipper;
+pub mod marlin;
 
 use crate::gcode::Event;
-use crate::machine::Machine;
+use crate::machine::{Firmware as MachineFirmware, Machine};
 use crate::motion::Segment;
 
 /// A firmware's motion planning and step generation, as a stream.
@@ -24,5 +25,11 @@ pub trait Firmware {
 
 /// The firmware the profile names.
 pub fn for_machine(machine: &Machine) -> Box<dyn Firmware + Send + '_> {
-    Box::new(klipper::Klipper::new(machine))
+    match &machine.firmware {
+        MachineFirmware::Klipper => Box::new(klipper::Klipper::new(machine)),
+        MachineFirmware::Marlin(m) => Box::new(marlin::Marlin::new(
+            machine,
+            marlin::settings::Settings::new(m),
+        )),
+    }
 }
