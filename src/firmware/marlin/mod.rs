@@ -2,12 +2,13 @@
 //! segments ([`segmenter`], `line_to_destination_kinematic`), each segment a planner block
 //! on whole tower steps ([`block`], `_populate_block`: per-tower limits, classic jerk), the
 //! block buffer's bounded lookahead ([`lookahead`], `recalculate`), each block's step-rate
-//! trapezoid ([`trapezoid`]) and its pieces, linear in tower space ([`pieces`]). Arcs come
+//! trapezoid ([`trapezoid`]) or S-curve ([`scurve`]) and its pieces, linear in tower space ([`pieces`]). Arcs come
 //! cut by `plan_arc` from the interpreter; each chord is one block.
 
 pub mod block;
 pub mod lookahead;
 pub mod pieces;
+pub mod scurve;
 pub mod segmenter;
 pub mod settings;
 #[cfg(test)]
@@ -216,7 +217,13 @@ impl Marlin {
             let b = &pb.block;
             let t = trapezoid::trapezoid(b, pb.entry_mm_s, pb.exit_mm_s);
             let n = f64::from(b.step_events);
-            trapezoid::ramps(&t, b.accel_steps_s2, n, &mut self.ramps);
+            trapezoid::ramps(
+                &t,
+                b.accel_steps_s2,
+                n,
+                self.settings.s_curve,
+                &mut self.ramps,
+            );
             let duration: f64 = self.ramps.iter().map(|r| r.dt_s).sum();
             let to = self.pose(&b.to_steps, self.pose.p);
             if b.moves_towers() {

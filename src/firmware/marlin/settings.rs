@@ -36,6 +36,8 @@ pub struct Settings {
     pub block_buffer_size: usize,
     /// `AUTO_BED_LEVELING_UBL`: UBL's segmenter.
     pub ubl: bool,
+    /// `S_CURVE_ACCELERATION`.
+    pub s_curve: bool,
 }
 
 impl Settings {
@@ -62,6 +64,7 @@ impl Settings {
             minimum_planner_speed_mm_s: p.minimum_planner_speed_mm_s,
             block_buffer_size: p.block_buffer_size as usize,
             ubl: p.ubl,
+            s_curve: p.s_curve,
         };
         s.refresh_accel_steps();
         s

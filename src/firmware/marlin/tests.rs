@@ -45,6 +45,19 @@ fn q5(min_steps: u32) -> (Machine, Profile) {
     (m, p)
 }
 
+/// The spec's generic delta (L 250, R 124) at 3000 mm/s², towers capped at 9000 mm/s².
+fn generic() -> (Machine, Profile) {
+    let m = machine(124.0, 250.0);
+    let p = Profile {
+        print_accel_mm_s2: 3000.0,
+        travel_accel_mm_s2: 3000.0,
+        max_accel_mm_s2: [9000.0; 4],
+        max_feedrate_mm_s: [500.0; 4],
+        ..profile(&m)
+    };
+    (m, p)
+}
+
 fn v(x: f64, y: f64, z: f64) -> Vec3 {
     Vec3::new(x, y, z)
 }
@@ -97,14 +110,7 @@ fn the_towers_and_the_inverse_kinematics_are_marlins() {
 /// from 8000 to √(8000² − 2·240000·133) = 400 steps/s.
 #[test]
 fn a_straight_move_takes_the_trapezoids_time() {
-    let m = machine(124.0, 250.0);
-    let p = Profile {
-        print_accel_mm_s2: 3000.0,
-        travel_accel_mm_s2: 3000.0,
-        max_accel_mm_s2: [9000.0; 4],
-        max_feedrate_mm_s: [500.0; 4],
-        ..profile(&m)
-    };
+    let (m, p) = generic();
     let pieces = run(&m, &p, &[(v(0.0, 0.0, 50.0), v(0.0, 0.0, 150.0), 100.0)]);
     let s1 = (8000.0f64.powi(2) - 120.0f64.powi(2)) / 480000.0;
     let want = (8000.0 - 120.0) / 240000.0 + (7867.0 - s1) / 8000.0 + (8000.0 - 400.0) / 240000.0;
@@ -306,11 +312,27 @@ fn trapezoid_ramps_keep_the_step_count() {
         decelerate_after: 1.0,
     };
     let mut r = Vec::new();
-    trapezoid::ramps(&t, 40000.0, 10.0, &mut r);
+    trapezoid::ramps(&t, 40000.0, 10.0, false, &mut r);
     let peak = (895.0f64 * 895.0 + 80000.0).sqrt();
     let end = (peak * peak - 720000.0).sqrt();
     assert_eq!(r.len(), 2);
     assert!((r[0].dt_s - (peak - 895.0) / 40000.0).abs() < 1e-12);
     assert!((r[1].dt_s - (peak - end) / 40000.0).abs() < 1e-12);
     assert!((r[1].s1() - 10.0).abs() < 1e-9);
+}
+
+/// T1 with S_CURVE_ACCELERATION: the same time and end (the Bézier keeps each phase's time
+/// and steps), the acceleration peaking at 1.875 × 3000 mm/s² and starting from 0.
+#[test]
+fn the_s_curve_keeps_the_time_and_peaks_at_1_875_times_the_acceleration() {
+    let (m, p) = generic();
+    let leg = [(v(0.0, 0.0, 50.0), v(0.0, 0.0, 150.0), 100.0)];
+    let trapezoid = run(&m, &p, &leg);
+    let s_curve = run(&m, &Profile { s_curve: true, ..p }, &leg);
+    assert!((duration(&trapezoid) - duration(&s_curve)).abs() < 1e-12);
+    let peak = s_curve.iter().map(|s| s.a.norm()).fold(0.0, f64::max);
+    assert_eq!(peak, 1.875 * 3000.0);
+    assert!(s_curve[0].a.norm() < 0.05 * 3000.0);
+    let (end, _) = s_curve.last().unwrap().end();
+    assert!((end - v(0.0, 0.0, 150.0)).norm() < 1e-9);
 }

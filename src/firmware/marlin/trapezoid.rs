@@ -68,8 +68,23 @@ pub fn trapezoid(b: &Block, entry_mm_s: f64, exit_mm_s: f64) -> Trapezoid {
 /// phases (acceleration, cruise, deceleration, and the rest of the deceleration at the final
 /// rate when the floor is reached early), or, when the initial rate is above the nominal
 /// (a block slower than `MINIMAL_STEP_RATE`), its first step at the initial rate and the
-/// others at the nominal.
-pub fn ramps(t: &Trapezoid, a: f64, n: f64, out: &mut Vec<Ramp>) {
+/// others at the nominal. With `s_curve`, the acceleration and deceleration phases follow
+/// the Bézier ([`super::scurve`]) over the same time and steps.
+pub fn ramps(t: &Trapezoid, a: f64, n: f64, s_curve: bool, out: &mut Vec<Ramp>) {
+    trapezoid_ramps(t, a, n, out);
+    if s_curve {
+        let phases = std::mem::take(out);
+        for r in &phases {
+            if r.accel != 0.0 {
+                super::scurve::bezier(r, out);
+            } else {
+                out.push(*r);
+            }
+        }
+    }
+}
+
+fn trapezoid_ramps(t: &Trapezoid, a: f64, n: f64, out: &mut Vec<Ramp>) {
     out.clear();
     let mut s = 0.0;
     let mut push = |dt: f64, rate: f64, accel: f64, phase: Phase, s: &mut f64| {
