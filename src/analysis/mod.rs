@@ -13,10 +13,10 @@ use indicatif::ProgressBar;
 use rayon::prelude::*;
 
 use crate::firmware;
-use crate::gcode::{self, Diagnostic, Event, ReadStats, Severity};
+use crate::gcode::{self, Diagnostic, Event, ReadStats};
 use crate::machine::Machine;
 use crate::path::Vec3;
-use crate::report::{MAX_LISTED, MoveStats, Report};
+use crate::report::{DiagnosticLog, MoveStats, Report};
 
 mod move_check;
 mod observe;
@@ -195,10 +195,9 @@ pub fn check_file(
     let file = File::open(path).with_context(|| format!("cannot open {}", path.display()))?;
     let name = path.display().to_string();
     let mut report = Report::new(&name, &machine.name, machine.motors.max_force_n, all_moves);
-    // The reader's diagnostics: the first MAX_LISTED kept, the others only counted, so a file
-    // with a warning on every line does not fill the memory.
-    let mut diags = Vec::new();
-    let (mut unlisted_warnings, mut unlisted_errors) = (0, 0);
+    // The reader's diagnostics: the first MAX_LISTED kept, all counted and grouped by kind,
+    // so a file with a warning on every line does not fill the memory.
+    let mut diags = DiagnosticLog::default();
     let input = ProgressReader {
         inner: file,
         bar: progress,
@@ -215,18 +214,10 @@ pub fn check_file(
                 bar.set_message(format!("{} moves", report.summary.moves));
             }
         },
-        |d| match d.severity {
-            _ if diags.len() < MAX_LISTED => diags.push(d),
-            Severity::Warning => unlisted_warnings += 1,
-            Severity::Error => unlisted_errors += 1,
-        },
+        |d| diags.push(d),
     )
     .with_context(|| format!("cannot read {name}"))?;
-    for d in &diags {
-        report.add_diagnostic(d);
-    }
-    report.summary.warnings += unlisted_warnings;
-    report.summary.errors += unlisted_errors;
+    report.add_diagnostics(diags);
     report.summary.lines = totals.read.lines;
     report.summary.print_time_s = totals.print_time_s;
     let lines = report.violation_lines();

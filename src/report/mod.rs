@@ -2,11 +2,13 @@
 //! The writers only format a [`Report`]; they compute nothing.
 
 mod annotations;
+mod diagnostics;
 mod github;
 mod stats;
 mod text;
 
 pub use annotations::{annotations, summary_lines};
+pub use diagnostics::{DiagnosticKind, DiagnosticKinds, DiagnosticLog, KIND_LINES};
 pub use github::write_github;
 pub use stats::{MoveStats, NEAR_SINGULAR_RATIO, Problem, RunForces, Worst};
 pub use text::write_text;
@@ -31,6 +33,8 @@ pub struct Report {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub moves: Option<Vec<MoveEntry>>,
     pub diagnostics: Vec<DiagnosticEntry>,
+    /// The diagnostics grouped by kind, each with its count and first lines.
+    pub diagnostic_kinds: DiagnosticKinds,
 }
 
 #[derive(Clone, Debug, Default, Serialize)]
@@ -140,6 +144,7 @@ impl Report {
             violations: Vec::new(),
             moves: all_moves.then(Vec::new),
             diagnostics: Vec::new(),
+            diagnostic_kinds: DiagnosticKinds::default(),
         }
     }
 
@@ -284,6 +289,22 @@ impl Report {
     }
 
     pub fn add_diagnostic(&mut self, d: &Diagnostic) {
+        self.diagnostic_kinds.add(d);
+        self.list_diagnostic(d);
+    }
+
+    /// Takes in the diagnostics of the reader (after the moves' own).
+    pub fn add_diagnostics(&mut self, log: DiagnosticLog) {
+        for d in &log.listed {
+            self.list_diagnostic(d);
+        }
+        self.summary.warnings += log.unlisted_warnings;
+        self.summary.errors += log.unlisted_errors;
+        self.diagnostic_kinds.merge(log.kinds);
+    }
+
+    /// Counts a diagnostic, and lists it while fewer than [`MAX_LISTED`] are.
+    fn list_diagnostic(&mut self, d: &Diagnostic) {
         match d.severity {
             Severity::Warning => self.summary.warnings += 1,
             Severity::Error => self.summary.errors += 1,
@@ -292,10 +313,7 @@ impl Report {
             self.diagnostics.push(DiagnosticEntry {
                 line: d.line,
                 column: d.column,
-                severity: match d.severity {
-                    Severity::Warning => "warning",
-                    Severity::Error => "error",
-                },
+                severity: diagnostics::severity_name(d.severity),
                 message: d.message.clone(),
             });
         }
