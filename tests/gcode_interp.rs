@@ -230,12 +230,14 @@ fn set_velocity_limit() {
                     accel_mm_s2: Some(3000.0),
                     square_corner_velocity_mm_s: Some(0.0),
                     minimum_cruise_ratio: Some(0.25),
+                    accel_to_decel_mm_s2: None,
                 }
             },
             Event::Limits {
                 line: 2,
                 change: LimitChange {
                     accel_mm_s2: Some(500.0),
+                    accel_to_decel_mm_s2: Some(250.0),
                     ..LimitChange::default()
                 }
             }
@@ -244,11 +246,7 @@ fn set_velocity_limit() {
     let got: Vec<(u64, u32, Severity)> = d.iter().map(|d| (d.line, d.column, d.severity)).collect();
     assert_eq!(
         got,
-        vec![
-            (2, 30, Severity::Warning),
-            (3, 43, Severity::Error),
-            (3, 20, Severity::Error)
-        ]
+        vec![(3, 43, Severity::Error), (3, 20, Severity::Error)]
     );
 }
 

@@ -460,13 +460,14 @@ fn any_event() -> impl Strategy<Value = Event> {
             |(path, e_mm, feed_mm_s, line)| Event::Move(Move { line, path, e_mm, feed_mm_s, offset_mm: Vec3::zeros() })
         ),
         1 => (any_number(), 1..1000u64).prop_map(|(dwell_s, line)| Event::Stop { line, dwell_s }),
-        1 => (opt(), opt(), opt(), opt(), 1..1000u64).prop_map(|(v, a, s, m, line)| Event::Limits {
+        1 => (opt(), opt(), opt(), opt(), opt(), 1..1000u64).prop_map(|(v, a, s, m, a2d, line)| Event::Limits {
             line,
             change: LimitChange {
                 velocity_mm_s: v,
                 accel_mm_s2: a,
                 square_corner_velocity_mm_s: s,
                 minimum_cruise_ratio: m,
+                accel_to_decel_mm_s2: a2d,
             },
         }),
     ]

@@ -195,6 +195,7 @@ pub fn check_file(
     let file = File::open(path).with_context(|| format!("cannot open {}", path.display()))?;
     let name = path.display().to_string();
     let mut report = Report::new(&name, &machine.name, machine.motors.max_force_n, all_moves);
+    report.arm_magnet_hold_n = machine.geometry.arm_magnet_hold_n;
     // The reader's diagnostics: the first MAX_LISTED kept, all counted and grouped by kind,
     // so a file with a warning on every line does not fill the memory.
     let mut diags = DiagnosticLog::default();

@@ -172,6 +172,7 @@ impl Observer for Verdict<'_> {
             force_n: [0, 1, 2].map(|i| &fo.force_n[i][j0..j1]),
             available_n: [0, 1, 2].map(|i| &available[i][j0..j1]),
             speed_mm_s: [0, 1, 2].map(|i| &fo.dq_mm_s[i][j0..j1]),
+            tension_n: [0, 1, 2].map(|i| &fo.tension_n[i][j0..j1]),
         };
         if fo.ok[lanes.clone()].iter().all(|&ok| ok) {
             stats.add_run(&forces(lanes.start, lanes.end));

@@ -87,6 +87,8 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let s = model
         .evaluate(pos, vel, acc)
         .with_context(|| format!("nozzle position ({x}, {y}, {z}) mm is unreachable"))?;
+    // The force each motor can give at its carriage's speed.
+    let available = s.dq_mm_s.map(|v| machine.motors.available_force_n(v));
     match args.format {
         Format::Json => {
             /// The model's state and the force each motor can give at its carriage's speed.
@@ -98,7 +100,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
             }
             let out = PoseJson {
                 state: &s,
-                available_force_n: s.dq_mm_s.map(|v| machine.motors.available_force_n(v)),
+                available_force_n: available,
             };
             println!("{}", serde_json::to_string(&out)?);
         }
@@ -112,12 +114,14 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
                 "{:<22}{:>14}{:>14}{:>14}",
                 "tower", TOWER_NAMES[0], TOWER_NAMES[1], TOWER_NAMES[2]
             );
-            let rows: [(&str, [f64; 3]); 5] = [
+            let rows: [(&str, [f64; 3]); 7] = [
                 ("carriage q (mm)", s.q_mm),
                 ("velocity dq (mm/s)", s.dq_mm_s),
                 ("accel ddq (mm/s²)", s.ddq_mm_s2),
                 ("force Q (N)", s.force_n),
+                ("available (N)", available),
                 ("lambda (N/m)", s.lambda),
+                ("arm tension (N)", s.arm_tension_n),
             ];
             for (label, v) in rows {
                 println!("{label:<22}{:>14.4}{:>14.4}{:>14.4}", v[0], v[1], v[2]);

@@ -171,13 +171,20 @@ impl DeltaModel {
             ddq_mm_s2: c.ddq,
             force_n: c.force,
             lambda,
-            arm_tension_n: [0, 1, 2].map(|i| 2.0 * lambda[i] * self.arm_mm[i] * MM),
+            arm_tension_n: [0, 1, 2].map(|i| self.arm_tension_n(i, c.w[i])),
             kinetic_j,
             potential_j,
             power_w: c.power_w,
             energy_rate_w: c.energy_rate_w,
             jx_condition: (arm2_sum * inv_f2).sqrt(),
         })
+    }
+
+    /// The tension of parallelogram `i`, 2λ_i·l_i (λ_i of eq. 13 in N/m, l in m), from
+    /// w_i = (Jx⁻ᵀ (p̈ + g e_z))_i in 1/mm · m/s²: λ_i = ½·(m_plat + 3 m_link)·w_i/mm.
+    #[inline(always)]
+    fn arm_tension_n(&self, i: usize, w: f64) -> f64 {
+        self.platform_kg * w * self.arm_mm[i]
     }
 
     /// Why [`Self::core`] found a state invalid.
@@ -192,7 +199,8 @@ impl DeltaModel {
         }
     }
 
-    /// Actuator forces (eq. 14) and carriage velocities (eq. 7) over a block of states,
+    /// Actuator forces (eq. 14), carriage velocities (eq. 7) and arm tensions (eq. 13) over
+    /// a block of states,
     /// the first `len` lanes (the lanes after them, up to a multiple of eight, are computed
     /// too, from whatever they hold, and mean nothing). Compiled for AVX-512 and AVX2 as well
     /// as the baseline, chosen at run time: the same operations in the same order, so the
@@ -242,6 +250,9 @@ impl DeltaModel {
             out.dq_mm_s[0][j] = c.dq[0];
             out.dq_mm_s[1][j] = c.dq[1];
             out.dq_mm_s[2][j] = c.dq[2];
+            for i in 0..3 {
+                out.tension_n[i][j] = self.arm_tension_n(i, c.w[i]);
+            }
             out.ok[j] = c.ok;
         }
     }
@@ -266,6 +277,8 @@ pub struct ForceBlock {
     pub force_n: [[f64; BLOCK]; 3],
     /// q̇_i (eq. 7), mm/s: what the motor's available force depends on.
     pub dq_mm_s: [[f64; BLOCK]; 3],
+    /// Each parallelogram's tension, 2λ_i·l_i (eq. 13), N.
+    pub tension_n: [[f64; BLOCK]; 3],
     /// False where the state has no valid pose: [`DeltaModel::evaluate`] says why.
     pub ok: [bool; BLOCK],
 }
@@ -285,6 +298,7 @@ impl Default for ForceBlock {
         ForceBlock {
             force_n: [[0.0; BLOCK]; 3],
             dq_mm_s: [[0.0; BLOCK]; 3],
+            tension_n: [[0.0; BLOCK]; 3],
             ok: [false; BLOCK],
         }
     }
@@ -655,6 +669,8 @@ mod tests {
             for i in 0..3 {
                 assert_eq!(fast.dq_mm_s[i][j].to_bits(), s.dq_mm_s[i].to_bits());
                 assert_eq!(base.dq_mm_s[i][j].to_bits(), s.dq_mm_s[i].to_bits());
+                assert_eq!(fast.tension_n[i][j].to_bits(), s.arm_tension_n[i].to_bits());
+                assert_eq!(base.tension_n[i][j].to_bits(), s.arm_tension_n[i].to_bits());
             }
         }
         assert!(bad >= 4 * (len / 16), "{bad} invalid lanes");

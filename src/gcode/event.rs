@@ -26,6 +26,9 @@ pub struct LimitChange {
     pub accel_mm_s2: Option<f64>,
     pub square_corner_velocity_mm_s: Option<f64>,
     pub minimum_cruise_ratio: Option<f64>,
+    /// ACCEL_TO_DECEL, which only Klipper before 2024 reads (a profile with
+    /// `limits.max_accel_to_decel_mm_s2`).
+    pub accel_to_decel_mm_s2: Option<f64>,
 }
 
 /// What one G-code line asks of the machine, in the order the lines stand.

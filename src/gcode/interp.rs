@@ -599,19 +599,13 @@ fn set_velocity_limit(p: &ParsedLine, d: &mut Diags<impl FnMut(Diagnostic)>) -> 
             }
         }
     };
-    let change = LimitChange {
+    LimitChange {
         velocity_mm_s: get("VELOCITY", false, false),
         accel_mm_s2: get("ACCEL", false, false),
         square_corner_velocity_mm_s: get("SQUARE_CORNER_VELOCITY", true, false),
         minimum_cruise_ratio: get("MINIMUM_CRUISE_RATIO", true, true),
-    };
-    if let Some(q) = p.param("ACCEL_TO_DECEL") {
-        d.warn(
-            q.column,
-            "ACCEL_TO_DECEL is ignored (deprecated in Klipper; use MINIMUM_CRUISE_RATIO)".into(),
-        );
+        accel_to_decel_mm_s2: get("ACCEL_TO_DECEL", false, false),
     }
-    change
 }
 
 /// Klipper's SET_INPUT_SHAPER parameters (input_shaper.py `InputShaperParams.update`):

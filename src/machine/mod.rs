@@ -51,6 +51,9 @@ pub struct Geometry {
     /// Nozzle z after G28 at x = y = 0.
     pub home_z_mm: f64,
     pub print_radius_mm: f64,
+    /// Magnetic ball joints: the pull at which one parallelogram's joints let go (both
+    /// rods together), N. None: the arms do not come off.
+    pub arm_magnet_hold_n: Option<f64>,
 }
 
 /// Lumped masses of Fig. 2, kg.
@@ -70,6 +73,9 @@ pub struct Limits {
     pub max_accel_mm_s2: f64,
     pub square_corner_velocity_mm_s: f64,
     pub minimum_cruise_ratio: f64,
+    /// Klipper before 2024 (v0.12 and older): its `max_accel_to_decel`, mm/s², used
+    /// instead of `minimum_cruise_ratio` and kept when ACCEL changes; None for Klipper since.
+    pub max_accel_to_decel_mm_s2: Option<f64>,
     pub max_z_velocity_mm_s: f64,
     pub max_z_accel_mm_s2: f64,
     /// Klipper's delta edge limits (half / quarter speed near the edge).

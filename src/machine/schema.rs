@@ -50,6 +50,7 @@ struct RawGeometry {
     tower_angles_deg: [f64; 3],
     home_z_mm: f64,
     print_radius_mm: f64,
+    arm_magnet_hold_n: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -69,6 +70,7 @@ struct RawLimits {
     square_corner_velocity_mm_s: f64,
     #[serde(default = "minimum_cruise_ratio")]
     minimum_cruise_ratio: f64,
+    max_accel_to_decel_mm_s2: Option<f64>,
     /// Klipper's default: `max_velocity_mm_s`.
     max_z_velocity_mm_s: Option<f64>,
     /// Klipper's default: `max_accel_mm_s2`.
@@ -258,6 +260,7 @@ impl RawMachine {
                 tower_angles_deg: g.tower_angles_deg,
                 home_z_mm: g.home_z_mm,
                 print_radius_mm: g.print_radius_mm,
+                arm_magnet_hold_n: g.arm_magnet_hold_n,
             },
             masses: Masses {
                 cart_kg: self.masses.cart_kg,
@@ -269,6 +272,7 @@ impl RawMachine {
                 max_accel_mm_s2: l.max_accel_mm_s2,
                 square_corner_velocity_mm_s: l.square_corner_velocity_mm_s,
                 minimum_cruise_ratio: l.minimum_cruise_ratio,
+                max_accel_to_decel_mm_s2: l.max_accel_to_decel_mm_s2,
                 max_z_velocity_mm_s: l.max_z_velocity_mm_s.unwrap_or(l.max_velocity_mm_s),
                 max_z_accel_mm_s2: l.max_z_accel_mm_s2.unwrap_or(l.max_accel_mm_s2),
                 edge_slowdown: l.edge_slowdown,

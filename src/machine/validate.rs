@@ -131,6 +131,12 @@ pub(super) fn check(m: &Machine) -> Result<(), Invalid> {
     for (key, v, range) in ranges {
         range.check(key, v)?;
     }
+    if let Some(a2d) = l.max_accel_to_decel_mm_s2 {
+        Range::Positive.check("limits.max_accel_to_decel_mm_s2", a2d)?;
+    }
+    if let Some(hold) = g.arm_magnet_hold_n {
+        Range::Positive.check("geometry.arm_magnet_hold_n", hold)?;
+    }
     if g.tower_angles_deg.iter().any(|a| !a.is_finite()) {
         return Err(Invalid::new(
             "geometry.tower_angles_deg",

@@ -28,6 +28,9 @@ pub struct Report {
     pub file: String,
     pub machine: String,
     pub limit_force_n: f64,
+    /// The profile's `geometry.arm_magnet_hold_n`, N.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub arm_magnet_hold_n: Option<f64>,
     pub summary: Summary,
     pub violations: Vec<Violation>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -53,6 +56,8 @@ pub struct Summary {
     /// line.
     pub peak_use: [f64; 3],
     pub peak_use_line: [u64; 3],
+    /// Largest pull of each parallelogram on the platform (both rods), N.
+    pub peak_tension_n: [f64; 3],
     /// Moves over the force available, unreachable, above home or outside the print
     /// radius.
     pub violations: u64,
@@ -66,6 +71,8 @@ pub struct Summary {
 pub enum ViolationKind {
     /// More force than the motor can give.
     Force,
+    /// An arm pulls harder than its magnetic joints hold.
+    ArmTension,
     Unreachable,
     AboveHome,
     BelowBed,
@@ -78,6 +85,7 @@ impl ViolationKind {
     pub fn as_str(self) -> &'static str {
         match self {
             ViolationKind::Force => "force",
+            ViolationKind::ArmTension => "arm_tension",
             ViolationKind::Unreachable => "unreachable",
             ViolationKind::AboveHome => "above_home",
             ViolationKind::BelowBed => "below_bed",
@@ -140,6 +148,7 @@ impl Report {
             file: file.to_string(),
             machine: machine.to_string(),
             limit_force_n,
+            arm_magnet_hold_n: None,
             summary: Summary::default(),
             violations: Vec::new(),
             moves: all_moves.then(Vec::new),
@@ -159,6 +168,7 @@ impl Report {
                 s.peak_line[i] = m.line;
                 s.peak_t_s[i] = m.peak_t_s[i];
             }
+            s.peak_tension_n[i] = s.peak_tension_n[i].max(m.peak_tension_n[i]);
             if m.worst[i].ratio > s.peak_use[i] {
                 s.peak_use[i] = m.worst[i].ratio;
                 s.peak_use_line[i] = m.line;
@@ -272,7 +282,23 @@ impl Report {
                     command: String::new(),
                 });
             }
-            None => return None,
+            None => {
+                let hold = self.arm_magnet_hold_n?;
+                let pull = m.peak_tension_n;
+                let tower = (0..3).max_by(|&a, &b| pull[a].total_cmp(&pull[b]))?;
+                if pull[tower] <= hold {
+                    return None;
+                }
+                (
+                    ViolationKind::ArmTension,
+                    tower,
+                    m.peak_tension_t_s[tower],
+                    format!(
+                        "ARM LETS GO: tower {}'s arms pull {:.1} N, their magnets hold {hold:.1} N",
+                        TOWER_NAMES[tower], pull[tower]
+                    ),
+                )
+            }
         };
         let phase = m.peak_phase[worst];
         Some(Violation {
@@ -382,6 +408,7 @@ pub(crate) mod tests {
             force_n: [&[f[0]], &[f[1]], &[f[2]]],
             available_n: [&[30.0]; 3],
             speed_mm_s: [&[120.0]; 3],
+            tension_n: [&[f[0]], &[f[1]], &[f[2]]],
         });
     }
 
@@ -431,6 +458,27 @@ pub(crate) mod tests {
         assert!(r.failed());
         let worst: Vec<u64> = r.worst_first().iter().map(|v| v.line).collect();
         assert_eq!(worst, [30, 20]);
+    }
+
+    #[test]
+    fn an_arm_pulling_harder_than_its_magnets_is_a_violation() {
+        let mut r = Report::new("part.gcode", "Q5", 30.0, false);
+        r.arm_magnet_hold_n = Some(20.0);
+        let mut m = MoveStats::new(5);
+        sample(&mut m, 1.0, Phase::Accel, [10.0, 21.5, 12.0]);
+        r.add_move(&m);
+        let v = &r.violations[0];
+        assert_eq!((v.kind, v.tower, v.line), (ViolationKind::ArmTension, 2, 5));
+        assert!(
+            v.message.contains("tower B's arms pull 21.5 N"),
+            "{}",
+            v.message
+        );
+        assert_eq!(r.summary.peak_tension_n, [10.0, 21.5, 12.0]);
+        // Within the hold, or no magnets: nothing.
+        let mut ok = Report::new("part.gcode", "Q5", 30.0, false);
+        ok.add_move(&m);
+        assert!(ok.violations.is_empty());
     }
 
     #[test]

@@ -71,6 +71,9 @@ pub struct MoveStats {
     /// Per tower, the instant its motor was asked the largest share of the force it can
     /// give at that carriage speed.
     pub worst: [Worst; 3],
+    /// Largest pull of each parallelogram on the platform (positive: tension), N, and when.
+    pub peak_tension_n: [f64; 3],
+    pub peak_tension_t_s: [f64; 3],
     /// The most severe geometric problem found, if any.
     pub problem: Option<Problem>,
     /// Near a singular pose: the tower (0 = A) whose carriage moves fastest relative to the
@@ -122,6 +125,8 @@ pub struct RunForces<'a> {
     pub force_n: [&'a [f64]; 3],
     pub available_n: [&'a [f64]; 3],
     pub speed_mm_s: [&'a [f64]; 3],
+    /// Each parallelogram's tension, N.
+    pub tension_n: [&'a [f64]; 3],
 }
 
 /// A carriage moving this many times faster than the nozzle marks a near-singular pose (the
@@ -137,6 +142,8 @@ impl MoveStats {
             peak_t_s: [0.0; 3],
             peak_phase: [Phase::Cruise; 3],
             worst: [Worst::default(); 3],
+            peak_tension_n: [0.0; 3],
+            peak_tension_t_s: [0.0; 3],
             problem: None,
             near_singular: None,
             offset_mm: [0.0; 3],
@@ -153,8 +160,12 @@ impl MoveStats {
             // with a strict `>` keeps.
             let (mut peak, mut peak_at) = (self.peak_force_n[i], usize::MAX);
             let (mut ratio, mut ratio_at) = (self.worst[i].ratio, usize::MAX);
+            let (mut pull, mut pull_at) = (self.peak_tension_n[i], usize::MAX);
             let (f, avail) = (run.force_n[i], run.available_n[i]);
-            for (j, (&q, &a)) in f.iter().zip(avail).enumerate() {
+            for (j, ((&q, &a), &t)) in f.iter().zip(avail).zip(run.tension_n[i]).enumerate() {
+                let up = t > pull;
+                pull = if up { t } else { pull };
+                pull_at = if up { j } else { pull_at };
                 let q = q.abs();
                 let up = q > peak;
                 peak = if up { q } else { peak };
@@ -170,6 +181,10 @@ impl MoveStats {
                 self.peak_force_n[i] = peak;
                 self.peak_t_s[i] = t;
                 self.peak_phase[i] = ph;
+            }
+            if let Some(&t) = run.t_s.get(pull_at) {
+                self.peak_tension_n[i] = pull;
+                self.peak_tension_t_s[i] = t;
             }
             if let Some((&t, &ph)) = run.t_s.get(ratio_at).zip(run.phase.get(ratio_at)) {
                 self.worst[i] = Worst {
@@ -197,6 +212,10 @@ impl MoveStats {
             }
             if later.worst[i].ratio > self.worst[i].ratio {
                 self.worst[i] = later.worst[i];
+            }
+            if later.peak_tension_n[i] > self.peak_tension_n[i] {
+                self.peak_tension_n[i] = later.peak_tension_n[i];
+                self.peak_tension_t_s[i] = later.peak_tension_t_s[i];
             }
         }
         if let Some(p) = &later.problem {
@@ -268,6 +287,7 @@ mod tests {
             force_n: [&[f[0]], &[f[1]], &[f[2]]],
             available_n: [&[available[0]], &[available[1]], &[available[2]]],
             speed_mm_s: [&[10.0 * t], &[20.0 * t], &[-30.0 * t]],
+            tension_n: [&[f[0]], &[-f[1]], &[2.0 * f[2]]],
         });
     }
 
@@ -304,6 +324,9 @@ mod tests {
         assert_eq!(s.worst[2].speed_mm_s, 0.03);
         assert_eq!(s.worst_use_tower(), 1);
         assert!(s.over_force());
+        // The largest pull (tower B pulls 5 at 0, then pushes): not the largest magnitude.
+        assert_eq!(s.peak_tension_n, [2.0, 5.0, 5.0]);
+        assert_eq!(s.peak_tension_t_s, [0.002, 0.0, 0.001]);
     }
 
     #[test]
@@ -322,6 +345,8 @@ mod tests {
             let a: [Vec<f64>; 3] =
                 [(); 3].map(|()| (0..n).map(|_| rng.range(1.0, 5.0).round()).collect());
             let v: [Vec<f64>; 3] = [(); 3].map(|()| (0..n).map(|_| rng.range(-9.0, 9.0)).collect());
+            let pull: [Vec<f64>; 3] =
+                [(); 3].map(|()| (0..n).map(|_| rng.range(-2.0, 6.0).round()).collect());
             let mut run = MoveStats::new(1);
             one(
                 &mut run,
@@ -338,6 +363,10 @@ mod tests {
                         scan.peak_force_n[i] = f[i][k].abs();
                         scan.peak_t_s[i] = t[k];
                         scan.peak_phase[i] = phase[k];
+                    }
+                    if pull[i][k] > scan.peak_tension_n[i] {
+                        scan.peak_tension_n[i] = pull[i][k];
+                        scan.peak_tension_t_s[i] = t[k];
                     }
                     let r = f[i][k].abs() / a[i][k];
                     if r > scan.worst[i].ratio {
@@ -358,6 +387,7 @@ mod tests {
                 force_n: [&f[0], &f[1], &f[2]],
                 available_n: [&a[0], &a[1], &a[2]],
                 speed_mm_s: [&v[0], &v[1], &v[2]],
+                tension_n: [&pull[0], &pull[1], &pull[2]],
             });
             assert_eq!(run, scan, "n = {n}");
         }

@@ -22,6 +22,10 @@ struct Toolhead {
     max_accel_mm_s2: f64,
     square_corner_velocity_mm_s: f64,
     minimum_cruise_ratio: f64,
+    /// Klipper before 2024: `max_accel_to_decel` as requested (`limits.
+    /// max_accel_to_decel_mm_s2`, SET_VELOCITY_LIMIT ACCEL_TO_DECEL); None: Klipper since,
+    /// `minimum_cruise_ratio`.
+    accel_to_decel_mm_s2: Option<f64>,
 }
 
 impl Toolhead {
@@ -32,9 +36,14 @@ impl Toolhead {
         scv * scv * (std::f64::consts::SQRT_2 - 1.0) / self.max_accel_mm_s2
     }
 
-    /// The pseudo-acceleration of the minimum_cruise_ratio check.
+    /// The pseudo-acceleration of the minimum_cruise_ratio check; before 2024 Klipper's
+    /// `max_accel_to_decel`, capped by max_accel (toolhead.py `_calc_junction_deviation`
+    /// of those versions): fixed when ACCEL changes, where the ratio scales with it.
     fn mcr_pseudo_accel_mm_s2(&self) -> f64 {
-        self.max_accel_mm_s2 * (1.0 - self.minimum_cruise_ratio)
+        match self.accel_to_decel_mm_s2 {
+            Some(a2d) => a2d.min(self.max_accel_mm_s2),
+            None => self.max_accel_mm_s2 * (1.0 - self.minimum_cruise_ratio),
+        }
     }
 }
 
@@ -68,6 +77,7 @@ impl MoveLimits {
                 max_accel_mm_s2: l.max_accel_mm_s2,
                 square_corner_velocity_mm_s: l.square_corner_velocity_mm_s,
                 minimum_cruise_ratio: l.minimum_cruise_ratio,
+                accel_to_decel_mm_s2: l.max_accel_to_decel_mm_s2,
             },
             config_velocity_mm_s: l.max_velocity_mm_s,
             config_accel_mm_s2: l.max_accel_mm_s2,
@@ -102,6 +112,13 @@ impl MoveLimits {
             .filter(|x| (0.0..1.0).contains(x))
         {
             t.minimum_cruise_ratio = r;
+        }
+        // Only the Klipper that reads it: newer ones ignore ACCEL_TO_DECEL.
+        if let (Some(_), Some(a2d)) = (
+            t.accel_to_decel_mm_s2,
+            positive(change.accel_to_decel_mm_s2),
+        ) {
+            t.accel_to_decel_mm_s2 = Some(a2d);
         }
     }
 

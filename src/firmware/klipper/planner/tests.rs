@@ -20,6 +20,7 @@ pub(super) fn machine() -> Machine {
             tower_angles_deg: [210.0, 330.0, 90.0],
             home_z_mm: 280.0,
             print_radius_mm: 85.0,
+            arm_magnet_hold_n: None,
         },
         masses: Masses {
             cart_kg: 0.25,
@@ -31,6 +32,7 @@ pub(super) fn machine() -> Machine {
             max_accel_mm_s2: 3000.0,
             square_corner_velocity_mm_s: 5.0,
             minimum_cruise_ratio: 0.5,
+            max_accel_to_decel_mm_s2: None,
             max_z_velocity_mm_s: 300.0,
             max_z_accel_mm_s2: 3000.0,
             edge_slowdown: true,
@@ -697,4 +699,33 @@ fn bad_numbers_never_give_nan() {
     );
     assert_eq!(m.iter().map(|m| m.line).collect::<Vec<_>>(), [3, 5]);
     close(t, 2.0 * 0.433_333_333, "print time");
+}
+
+#[test]
+fn klipper_before_2024_keeps_its_accel_to_decel_when_accel_changes() {
+    // A 10 mm move from rest to rest at 300 mm/s after ACCEL=1000: since 2024 the
+    // minimum_cruise_ratio 0.5 gives a pseudo-accel of 500, so the move's peak is the
+    // smaller of √(a·d) = 100 and √(a_mcr·d) = 70.71 (the cruise plateau caps the triangle
+    // at the mcr pseudo-accel's); before, max_accel_to_decel 1500 (capped at ACCEL = 1000)
+    // gives √(1000·10) = 100.
+    let line_move = |m: &mut Machine| {
+        let change = LimitChange {
+            accel_mm_s2: Some(1000.0),
+            ..LimitChange::default()
+        };
+        let mut planner = Planner::new(m);
+        let mut out = Vec::new();
+        planner.push(Event::Limits { line: 1, change }, &mut out);
+        planner.push(
+            mv(2, line([0.0, 0.0, 0.0], [10.0, 0.0, 0.0]), 0.0, 300.0),
+            &mut out,
+        );
+        planner.finish(&mut out);
+        out[0].cruise_v_mm_s
+    };
+    let mut now = machine();
+    close(line_move(&mut now), 70.710_678_1, "since 2024");
+    let mut legacy = machine();
+    legacy.limits.max_accel_to_decel_mm_s2 = Some(1500.0);
+    close(line_move(&mut legacy), 100.0, "before 2024");
 }
