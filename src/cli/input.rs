@@ -15,39 +15,61 @@ pub const STDIN_NAME: &str = "<stdin>";
 
 /// A G-code input, ready to be read (as often as needed) from `path`.
 pub struct Input {
-    /// The file, or a temporary copy of standard input (the analysis reads its input
-    /// twice: once to check it, once for the text of the flagged lines or to annotate it).
+    /// The file, or a temporary copy of standard input or a pipe (the analysis reads its
+    /// input twice: once to check it, once for the text of the flagged lines or to
+    /// annotate it).
     pub path: PathBuf,
     /// The name reports give it: the path as given, or [`STDIN_NAME`].
     pub name: String,
-    /// Standard input's copy, removed when the input is dropped.
+    /// The copy of standard input or a pipe, removed when the input is dropped.
     _copy: Option<tempfile::TempPath>,
 }
 
 impl Input {
     /// Opens the input `arg` names (`-`: standard input) and looks at its first bytes.
+    /// Standard input and a pipe (`<(xz -dc part.gcode.xz)`) are copied first: they can
+    /// be read only once.
     pub fn open(arg: &Path) -> anyhow::Result<Input> {
+        let name = arg.display().to_string();
         let input = if is_stdin(arg) {
-            let mut copy = tempfile::Builder::new()
-                .prefix("delta-gcode-stdin.")
-                .tempfile()
-                .context("cannot create a temporary file for standard input")?;
-            io::copy(&mut io::stdin().lock(), copy.as_file_mut())
-                .context("cannot read standard input")?;
-            Input {
-                path: copy.path().to_path_buf(),
-                name: STDIN_NAME.to_string(),
-                _copy: Some(copy.into_temp_path()),
-            }
+            Input::copied(&mut io::stdin().lock(), STDIN_NAME.to_string())?
+        } else if std::fs::metadata(arg).is_ok_and(|m| !m.is_file() && !m.is_dir()) {
+            let mut pipe = File::open(arg).with_context(|| format!("cannot open {name}"))?;
+            Input::copied(&mut pipe, name)?
         } else {
             Input {
                 path: arg.to_path_buf(),
-                name: arg.display().to_string(),
+                name,
                 _copy: None,
             }
         };
         input.refuse_non_gcode()?;
         Ok(input)
+    }
+
+    /// `from` copied into a private temporary file, removed when the input is dropped.
+    fn copied(from: &mut impl Read, name: String) -> anyhow::Result<Input> {
+        let mut copy = tempfile::Builder::new()
+            .prefix("delta-gcode-input.")
+            .tempfile()
+            .with_context(|| format!("cannot create a temporary file for {name}"))?;
+        io::copy(from, copy.as_file_mut()).with_context(|| format!("cannot read {name}"))?;
+        Ok(Input {
+            path: copy.path().to_path_buf(),
+            name,
+            _copy: Some(copy.into_temp_path()),
+        })
+    }
+
+    /// The name of its plots: the file's stem, or `stdin`.
+    pub fn stem(&self) -> String {
+        if self.name == STDIN_NAME {
+            return "stdin".to_string();
+        }
+        self.path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default()
     }
 
     /// An input error when the first bytes are not text G-code.

@@ -4,10 +4,9 @@
 //! every later write fails with EPIPE (Rust ignores SIGPIPE, so the process is not killed;
 //! `println!` would panic). Here a closed standard output ends the output quietly: the
 //! writes that follow are dropped, the command finishes and exits with the code it would
-//! have had (for `check`, its verdict; docs/ci-gate.md). A long output (`trace -o -`) asks
-//! [`Stdout::closed`] to stop early.
+//! have had (for `check`, its verdict; docs/ci-gate.md).
 
-use std::io::{self, ErrorKind, StdoutLock, Write};
+use std::io::{self, ErrorKind, Write};
 
 /// Writes a line to standard error, ignoring failures (a closed pipe there too).
 macro_rules! say {
@@ -18,26 +17,32 @@ macro_rules! say {
 }
 pub(crate) use say;
 
-/// Standard output, locked; see the module documentation.
+/// Writes a line to standard output, ignoring failures (`println!` panics on a closed
+/// pipe).
+macro_rules! put {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout(), $($arg)*);
+    }};
+}
+pub(crate) use put;
+
+/// Standard output (not locked, so that a writer on another thread may own it; buffer
+/// it); see the module documentation.
 pub struct Stdout {
-    inner: StdoutLock<'static>,
+    inner: io::Stdout,
     closed: bool,
 }
 
 /// Standard output for a command's results.
 pub fn stdout() -> Stdout {
     Stdout {
-        inner: io::stdout().lock(),
+        inner: io::stdout(),
         closed: false,
     }
 }
 
 impl Stdout {
-    /// The reader went away: nothing written from now on reaches anyone.
-    pub fn closed(&self) -> bool {
-        self.closed
-    }
-
     fn absorb<T>(&mut self, r: io::Result<T>, done: T) -> io::Result<T> {
         match r {
             Err(e) if e.kind() == ErrorKind::BrokenPipe => {
