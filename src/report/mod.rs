@@ -471,6 +471,9 @@ pub(crate) mod tests {
         assert_eq!(r.summary.peak_use_line, [20, 20, 10]);
         assert_eq!(r.violations[1].kind, ViolationKind::Unreachable);
         assert_eq!(r.violations[1].tower, 2);
+        // Out of reach: no forces, in the violation or in the summary.
+        assert_eq!(r.violations[1].peak_force_n, None);
+        assert_eq!(r.moves.as_ref().map(|m| m[2].peak_force_n), Some(None));
         assert!(r.failed());
         let worst: Vec<u64> = r.worst_first().iter().map(|v| v.line).collect();
         assert_eq!(worst, [30, 20]);
