@@ -100,8 +100,9 @@ fn delta_gcode(gcode: &Path, profile: &Path) -> (Heights, f64) {
         .expect("delta-gcode runs");
     assert!(
         out.status.code() != Some(2),
-        "check: {}",
-        common::stderr(&out)
+        "check: {}{}",
+        common::stderr(&out),
+        common::stdout(&out)
     );
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("json");
     let print_time = report["summary"]["print_time_s"]

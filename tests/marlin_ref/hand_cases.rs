@@ -269,7 +269,7 @@ fn t6_segments_under_min_steps_are_merged_and_run_fast() {
 
 /// T7: sub-step segments. G1 X1 at F60 from (0, 0, 5): plain segmenter 200 segments of
 /// 5 µm, 120 without a whole step dropped, 80 one-step blocks at 200 steps/s, ≈ 0.400 s
-/// instead of 1 s. UBL: min(lround(200), lround(10)) = 10 segments of 0.1 mm (3–4 steps)
+/// instead of 1 s (0.403 s with the ISR's integer ticks). UBL: min(lround(200), lround(10)) = 10 segments of 0.1 mm (3–4 steps)
 /// at 40–50 steps/s < 120: each takes 1/120 s for its first step, then (n − 1)/rate:
 /// ≈ 0.838 s.
 #[test]
@@ -281,6 +281,13 @@ fn t7_sub_step_segments() {
     let (run, b) = blocks_after(pre, "G1 X1 F60\n", &m, &opts);
     assert_eq!((b.len(), run.dropped - before), (80, 120));
     close(total_s(&b), 0.400, 0.005, "plain");
+    let (_, b) = blocks_after(
+        pre,
+        "G1 X1 F60\n",
+        &m,
+        &options(Segmenter::Plain, Timing::default()),
+    );
+    close(total_s(&b), 0.403, 0.0015, "plain, Marlin's ISR");
     let (_, b) = blocks_after(
         pre,
         "G1 X1 F60\n",
