@@ -108,10 +108,11 @@ fn the_trace_commands_marlins_steps() {
     for r in rows.iter().filter(|r| r[line] == 2.0) {
         assert!((r[q[0]] - r[q[1]]).abs() < 1e-9 && (r[q[1]] - r[q[2]]).abs() < 1e-9);
     }
-    // The dwell at the end stands on the last block's end: whole steps from home.
+    // The dwell at the end stands on the last block's end: whole steps from home (to the
+    // trace's 0.001 mm, twice: 0.08 step).
     let last = rows.last().unwrap();
     for qi in q {
         let k = (last[qi] - home) * 80.0;
-        assert!((k - k.round()).abs() < 1e-6, "{k}");
+        assert!((k - k.round()).abs() < 0.085, "{k}");
     }
 }

@@ -8,6 +8,7 @@ mod interp;
 mod marlin;
 pub mod parse;
 pub mod reader;
+pub mod sniff;
 
 use std::io::Read;
 
@@ -16,9 +17,10 @@ pub use dialect::{Dialect, FirmwareKind, SoftEndstops};
 pub use event::{
     ArcChord, DeltaChange, Diagnostic, Event, LimitChange, MarlinChange, Move, Severity,
 };
-pub use interp::{DEFAULT_FEED_MM_MIN, Interpreter, ReadStats, Retraction};
+pub use interp::{DEFAULT_FEED_MM_MIN, Interpreter, M204_P_OR_T_IGNORED, ReadStats, Retraction};
 pub use parse::{Command, ParsedLine, Word, parse_line};
 pub use reader::{ChunkReader, Line, LineReader};
+pub use sniff::{NotGcode, SNIFF_BYTES, sniff};
 
 use crate::path::Vec3;
 
