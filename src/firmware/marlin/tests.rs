@@ -336,3 +336,11 @@ fn the_s_curve_keeps_the_time_and_peaks_at_1_875_times_the_acceleration() {
     let (end, _) = s_curve.last().unwrap().end();
     assert!((end - v(0.0, 0.0, 150.0)).norm() < 1e-9);
 }
+
+/// A constant rate runs at a whole number of 2 MHz timer ticks per step: 4000 steps/s is
+/// 500 ticks exactly; 4100 steps/s is ⌊487.8⌋ = 487 ticks, so 2 000 000/487 = 4106.78.
+#[test]
+fn a_constant_rate_runs_at_whole_timer_ticks() {
+    assert_eq!(trapezoid::ticked_rate(4000.0), 4000.0);
+    assert!((trapezoid::ticked_rate(4100.0) - 2_000_000.0 / 487.0).abs() < 1e-9);
+}
