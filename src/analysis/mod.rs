@@ -70,6 +70,29 @@ pub fn run<R: Read, O: Observer>(
     input: R,
     machine: &Machine,
     observer: O,
+    on_move: impl FnMut(MoveResult<O::PerMove>) + Send,
+    on_diag: impl FnMut(Diagnostic),
+) -> io::Result<RunTotals> {
+    run_edited(input, machine, observer, &mut pass_on, on_move, on_diag)
+}
+
+/// An edit of the interpreter's events on their way to the firmware: takes one event, hands
+/// on (to its second argument) the events the firmware is to see instead.
+pub type EventEdit<'e> = dyn FnMut(Event, &mut dyn FnMut(Event)) + 'e;
+
+/// Hands an event on unchanged: the edit of a plain run.
+fn pass_on(event: Event, to_firmware: &mut dyn FnMut(Event)) {
+    to_firmware(event);
+}
+
+/// [`run`], with the interpreter's events going through `edit` on their way to the firmware:
+/// it hands on (to its second argument) the events the firmware is to see instead, e.g.
+/// limit changes added before a move (`tune`).
+pub fn run_edited<R: Read, O: Observer>(
+    input: R,
+    machine: &Machine,
+    observer: O,
+    edit: &mut EventEdit,
     mut on_move: impl FnMut(MoveResult<O::PerMove>) + Send,
     on_diag: impl FnMut(Diagnostic),
 ) -> io::Result<RunTotals> {
@@ -89,7 +112,7 @@ pub fn run<R: Read, O: Observer>(
         });
         // A send fails only when the model stage has stopped, and then its panic is
         // re-raised by the join below.
-        let totals = sequence(input, machine, BATCH, on_diag, |batch| {
+        let totals = sequence_edited(input, machine, BATCH, edit, on_diag, |batch| {
             let _ = to_model.send(batch);
         });
         drop(to_model);
@@ -109,6 +132,25 @@ pub fn sequence<R: Read>(
     machine: &Machine,
     batch_pieces: usize,
     on_diag: impl FnMut(Diagnostic),
+    on_batch: impl FnMut(Batch),
+) -> io::Result<RunTotals> {
+    sequence_edited(
+        input,
+        machine,
+        batch_pieces,
+        &mut pass_on,
+        on_diag,
+        on_batch,
+    )
+}
+
+/// [`sequence`], the events edited on their way to the firmware (see [`run_edited`]).
+fn sequence_edited<R: Read>(
+    input: R,
+    machine: &Machine,
+    batch_pieces: usize,
+    edit: &mut EventEdit,
+    on_diag: impl FnMut(Diagnostic),
     mut on_batch: impl FnMut(Batch),
 ) -> io::Result<RunTotals> {
     let geometry = MoveChecker::new(machine, ());
@@ -121,16 +163,18 @@ pub fn sequence<R: Read>(
         home,
         machine.arc_rules,
         |event: Event| {
-            if let Event::Move(m) = &event {
-                sequencer.check(m);
-            }
-            firmware.push(&event, &mut commanded);
-            for c in commanded.drain(..) {
-                sequencer.commanded(c);
-            }
-            if sequencer.pending_pieces() >= batch_pieces {
-                on_batch(sequencer.take_batch(false));
-            }
+            edit(event, &mut |event| {
+                if let Event::Move(m) = &event {
+                    sequencer.check(m);
+                }
+                firmware.push(&event, &mut commanded);
+                for c in commanded.drain(..) {
+                    sequencer.commanded(c);
+                }
+                if sequencer.pending_pieces() >= batch_pieces {
+                    on_batch(sequencer.take_batch(false));
+                }
+            })
         },
         on_diag,
     );

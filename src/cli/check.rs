@@ -28,6 +28,9 @@ pub struct Args {
     /// No progress bar
     #[arg(long, short)]
     pub quiet: bool,
+    /// No recommendation of limits that pass (it re-plans a failing file a few times)
+    #[arg(long)]
+    pub no_recommendation: bool,
     /// Write SVG plots into DIR: each file's tower forces around its worst moment
     /// (STEM-forces.svg) and a map of the bed by peak-force use (STEM-bed.svg)
     #[arg(long, value_name = "DIR")]
@@ -41,7 +44,13 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let machine = args.machine.load()?;
     let progress = Progress::new(args.quiet);
     let results = for_each_file_in_parallel(&args.files, |f| {
-        let report = check_with_progress(f, &machine, args.all_moves, &progress)?;
+        let mut report = check_with_progress(f, &machine, args.all_moves, &progress)?;
+        if report.failed() && report.summary.errors == 0 && !args.no_recommendation {
+            match delta_gcode::tune::recommend(f, &machine) {
+                Ok(r) => report.recommendation = Some(r),
+                Err(e) => report.recommendation_error = Some(format!("{e:#}")),
+            }
+        }
         if let Some(dir) = &args.plot {
             super::check_plots::write_plots(f, &machine, &report, dir)
                 .with_context(|| format!("plotting {}", f.display()))?;

@@ -34,6 +34,21 @@ pub struct Report {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub moves: Option<Vec<MoveEntry>>,
     pub diagnostics: Vec<DiagnosticEntry>,
+    /// A failing file: the limits under which it passes (verified by re-planning).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub recommendation: Option<Recommendation>,
+    /// A failing file with no recommendation: why none (a move no limit helps).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub recommendation_error: Option<String>,
+}
+
+/// Limits under which a file passes, and its print time with them (`tune`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Recommendation {
+    pub max_accel_mm_s2: f64,
+    pub square_corner_velocity_mm_s: f64,
+    pub max_velocity_mm_s: f64,
+    pub print_time_s: f64,
 }
 
 #[derive(Clone, Debug, Default, Serialize)]
@@ -149,6 +164,8 @@ impl Report {
             violations: Vec::new(),
             moves: all_moves.then(Vec::new),
             diagnostics: Vec::new(),
+            recommendation: None,
+            recommendation_error: None,
         }
     }
 
