@@ -9,7 +9,7 @@ use std::process::ExitCode;
 use anyhow::Context;
 
 use super::check::EXIT_VIOLATION;
-use super::common::{MachineArg, Progress, check_with_progress, print_diagnostics};
+use super::common::{MachineArg, Progress, RewriteArgs, check_with_progress, print_diagnostics};
 use super::replace::replace_file;
 use delta_gcode::emit::emit;
 use delta_gcode::report::{annotations, summary_lines, write_json, write_text};
@@ -21,12 +21,8 @@ pub struct Args {
     pub file: PathBuf,
     #[command(flatten)]
     pub machine: MachineArg,
-    /// Write the annotated G-code here
-    #[arg(long, short, value_name = "OUT", required_unless_present = "in_place")]
-    pub output: Option<PathBuf>,
-    /// Replace FILE by its annotated version (whole or not at all)
-    #[arg(long, conflicts_with = "output")]
-    pub in_place: bool,
+    #[command(flatten)]
+    pub write: RewriteArgs,
     /// Exit 1 when a move exceeds a limit (a slicer then aborts the export), 2 on input errors
     #[arg(long)]
     pub strict: bool,
@@ -42,7 +38,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let machine = args.machine.load()?;
     let report = check_with_progress(&args.file, &machine, false, &Progress::new(args.quiet))?;
     print_diagnostics(&report);
-    let target = args.output.as_ref().unwrap_or(&args.file);
+    let target = args.write.target(&args.file);
     let notes = annotations(&report);
     let summary = summary_lines(&report);
     replace_file(target, |w| {

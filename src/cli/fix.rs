@@ -11,7 +11,7 @@ use anyhow::Context;
 use serde::Serialize;
 
 use super::check::EXIT_VIOLATION;
-use super::common::{Format, MachineArg, text_or_json};
+use super::common::{Format, MachineArg, RewriteArgs, text_or_json};
 use super::replace::replace_file;
 use delta_gcode::emit::{Drop, emit_with};
 use delta_gcode::machine::Firmware;
@@ -25,12 +25,8 @@ pub struct Args {
     pub file: PathBuf,
     #[command(flatten)]
     pub machine: MachineArg,
-    /// Write the fixed G-code here
-    #[arg(long, short, value_name = "OUT", required_unless_present = "in_place")]
-    pub output: Option<PathBuf>,
-    /// Replace FILE by its fixed version (whole or not at all)
-    #[arg(long, conflicts_with = "output")]
-    pub in_place: bool,
+    #[command(flatten)]
+    pub write: RewriteArgs,
     /// Output format: text or json
     #[arg(long, value_parser = text_or_json(), default_value = "text")]
     pub format: Format,
@@ -68,7 +64,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         }
         Err(e) => return Err(e.context(format!("fixing {}", args.file.display()))),
     };
-    let target = args.output.as_ref().unwrap_or(&args.file);
+    let target = args.write.target(&args.file);
     let mut additions = plan.additions.clone();
     additions.summary = summary_lines(&plan);
     // The fixed file, checked as the firmware will read it before it replaces anything.

@@ -8,6 +8,7 @@ use std::process::ExitCode;
 
 use anyhow::Context;
 
+use super::common::RewriteArgs;
 use super::replace::replace_file;
 use delta_gcode::emit::strip;
 
@@ -16,16 +17,12 @@ pub struct Args {
     /// G-code file that `annotate` or `fix` wrote
     #[arg(value_name = "FILE")]
     pub file: PathBuf,
-    /// Write the stripped G-code here
-    #[arg(long, short, value_name = "OUT", required_unless_present = "in_place")]
-    pub output: Option<PathBuf>,
-    /// Replace FILE by its stripped version (whole or not at all)
-    #[arg(long, conflicts_with = "output")]
-    pub in_place: bool,
+    #[command(flatten)]
+    pub write: RewriteArgs,
 }
 
 pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
-    let target = args.output.as_ref().unwrap_or(&args.file);
+    let target = args.write.target(&args.file);
     replace_file(target, |w| {
         let input = BufReader::with_capacity(1 << 16, File::open(&args.file)?);
         strip(input, w)

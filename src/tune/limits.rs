@@ -35,22 +35,13 @@ impl Toolhead {
         }
     }
 
-    /// After an M204 / SET_VELOCITY_LIMIT, with the values Klipper accepts (the planner's
-    /// `MoveLimits::apply`: velocity and accel above 0, scv at least 0).
-    pub fn apply(&mut self, c: &LimitChange) {
-        let positive = |v: Option<f64>| v.filter(|x| x.is_finite() && *x > 0.0);
-        if let Some(v) = positive(c.velocity_mm_s) {
-            self.velocity_mm_s = v;
-        }
-        if let Some(a) = positive(c.accel_mm_s2) {
-            self.accel_mm_s2 = a;
-        }
-        if let Some(s) = c
-            .square_corner_velocity_mm_s
-            .filter(|x| x.is_finite() && *x >= 0.0)
-        {
-            self.scv_mm_s = s;
-        }
+    /// After an M204 / SET_VELOCITY_LIMIT, with the values Klipper accepts
+    /// ([`LimitChange::accepted`], as the planner applies them).
+    pub fn apply(&mut self, change: &LimitChange) {
+        let c = change.accepted();
+        self.velocity_mm_s = c.velocity_mm_s.unwrap_or(self.velocity_mm_s);
+        self.accel_mm_s2 = c.accel_mm_s2.unwrap_or(self.accel_mm_s2);
+        self.scv_mm_s = c.square_corner_velocity_mm_s.unwrap_or(self.scv_mm_s);
     }
 
     /// Each limit the smaller of the two.
