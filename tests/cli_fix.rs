@@ -373,3 +373,43 @@ fn a_passing_file_is_left_as_it_is() {
         stdout(&o)
     );
 }
+
+#[test]
+fn machine_maps_the_largest_acceleration_over_the_disc() {
+    let o = run(&["machine", &p(WEAK), "--format", "json"]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let map = &json(&o)["max_accel_map"];
+    let at = |key: &str| -> Vec<f64> {
+        map[key]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect()
+    };
+    let (rest, moving) = (at("at_rest_mm_s2"), at("at_speed_mm_s2"));
+    assert_eq!(rest.len(), 5);
+    // The edge of the disc is weaker than the centre; the weak test machine cannot take the
+    // 30000 mm/s² of tests/fixtures/tune/accel.gcode anywhere, and takes its 3000 at the
+    // centre.
+    assert!(rest[4] < rest[0], "{rest:?}");
+    assert!(
+        rest.iter()
+            .chain(&moving)
+            .all(|&a| a > 3000.0 && a < 30000.0),
+        "{rest:?} {moving:?}"
+    );
+    let text = stdout(&run(&["machine", &p(WEAK)]));
+    assert!(
+        text.contains("largest acceleration in the worst direction at the bed"),
+        "{text}"
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().display().to_string();
+    let o = run(&["machine", &p(WEAK), "--plot", &d]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    for name in ["kossel-weak-accel-rest.svg", "kossel-weak-accel-speed.svg"] {
+        let svg = std::fs::read_to_string(dir.path().join(name)).unwrap();
+        assert!(svg.contains("<svg") && svg.contains("max_accel"), "{name}");
+    }
+}

@@ -7,6 +7,7 @@ mod common;
 mod fix;
 mod import_klipper;
 mod machine;
+mod machine_accel;
 mod plot;
 mod pose;
 mod replace;

@@ -6,6 +6,7 @@
 //! Each pass streams the file again: memory does not grow with its size, except for the
 //! caps and the commands `fix` adds (a few per flagged move).
 
+pub mod capacity;
 mod commands;
 mod limits;
 mod search;
