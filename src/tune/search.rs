@@ -240,8 +240,6 @@ struct Pass {
 pub struct Passed {
     /// The caps over the whole file (the recommendation), unlimited for `fix`.
     pub global: Toolhead,
-    /// `fix`: the caps over ranges of lines.
-    pub segments: Vec<(u64, u64, Toolhead)>,
     /// The limit commands the caps take, before their moves.
     pub added: Vec<Added>,
     pub print_time_s: f64,
@@ -390,7 +388,6 @@ pub fn search(path: &Path, machine: &Machine, local: bool) -> anyhow::Result<Pas
         if p.report.summary.violations == 0 {
             return Ok(Passed {
                 global,
-                segments: segs,
                 added: p.added,
                 print_time_s: p.report.summary.print_time_s,
                 file_peak: p.file_peak,
