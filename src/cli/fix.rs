@@ -12,6 +12,7 @@ use serde::Serialize;
 
 use super::check::EXIT_VIOLATION;
 use super::common::{Format, MachineArg, RewriteArgs, text_or_json};
+use super::out::{say, stdout};
 use super::replace::replace_file;
 use delta_gcode::emit::{Drop, emit_with};
 use delta_gcode::machine::Firmware;
@@ -59,7 +60,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let plan = match plan_fix(&args.file, &machine) {
         Ok(p) => p,
         Err(e) if e.is::<Unfixable>() => {
-            eprintln!("delta-gcode: fix: {}: {e:#}", args.file.display());
+            say!("delta-gcode: fix: {}: {e:#}", args.file.display());
             return Ok(ExitCode::from(EXIT_VIOLATION));
         }
         Err(e) => return Err(e.context(format!("fixing {}", args.file.display()))),
@@ -92,7 +93,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         std::io::copy(&mut fixed, w).map(|_| ())
     })
     .with_context(|| format!("writing {}", target.display()))?;
-    let mut out = std::io::stdout().lock();
+    let mut out = stdout();
     match args.format {
         Format::Json => {
             let r = FixReport {

@@ -6,6 +6,7 @@ use std::path::Path;
 
 use serde_json::{Value, json};
 
+use super::out::put;
 use delta_gcode::machine::Machine;
 use delta_gcode::path::Vec3;
 use delta_gcode::plot::bed_map_svg;
@@ -52,14 +53,14 @@ fn table(machine: &Machine) -> Vec<(f64, [Option<f64>; 2])> {
 
 pub fn print_text(machine: &Machine) {
     let [_, v] = speeds(machine);
-    println!(
+    put!(
         "largest acceleration in the worst direction at the bed (profile max_accel {} mm/s²):",
         machine.limits.max_accel_mm_s2
     );
-    println!("  radius mm     at rest mm/s²   at {v:.0} mm/s mm/s²");
+    put!("  radius mm     at rest mm/s²   at {v:.0} mm/s mm/s²");
     let cell = |a: Option<f64>| a.map_or_else(|| "unreachable".to_string(), |a| format!("{a:.0}"));
     for (r, [rest, moving]) in table(machine) {
-        println!("  {r:>9.1} {:>15} {:>18}", cell(rest), cell(moving));
+        put!("  {r:>9.1} {:>15} {:>18}", cell(rest), cell(moving));
     }
 }
 

@@ -6,8 +6,10 @@ mod check_plots;
 mod common;
 mod fix;
 mod import_klipper;
+mod input;
 mod machine;
 mod machine_accel;
+mod out;
 mod plot;
 mod pose;
 mod replace;
@@ -17,6 +19,7 @@ mod trace;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+use out::say;
 
 /// Finds the moves in delta-printer G-code that ask a carriage motor for more force than
 /// it can give.
@@ -76,7 +79,7 @@ pub fn main() -> ExitCode {
     match result {
         Ok(code) => code,
         Err(e) => {
-            eprintln!("delta-gcode: error: {e:#}");
+            say!("delta-gcode: error: {e:#}");
             ExitCode::from(EXIT_ERROR)
         }
     }
