@@ -381,13 +381,14 @@ impl Shaper {
         let offsets = axes.iter().flat_map(Pulses::iter).map(|(_, tau)| tau);
         for tau in offsets.chain(std::iter::once(0.0)) {
             // Breaks of the planned motion after t + τ: the pieces' starts and the end.
-            let want = t + tau;
-            let found = self
-                .planned
-                .iter()
-                .map(|s| s.t0_s)
-                .chain(self.planned.back().map(Segment::t1_s))
-                .find(|&b| b > want + 1e-12);
+            // The planned pieces are in time order: the first start after `want` by
+            // bisection, else the last piece's end.
+            let want = t + tau + 1e-12;
+            let i = self.planned.partition_point(|s| s.t0_s <= want);
+            let found = match self.planned.get(i) {
+                Some(s) => Some(s.t0_s),
+                None => self.planned.back().map(Segment::t1_s).filter(|&b| b > want),
+            };
             if let Some(b) = found {
                 best = best.min(b - tau);
             }

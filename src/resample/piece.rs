@@ -107,7 +107,12 @@ pub fn sample_piece(
         let (p, v, a) = seg.at(tau);
         let (pos, vel, acc, kick) = match response {
             Some(r) => {
-                let lag = r.lag_at(&work.piece.lag, seg.a, tau);
+                // At the start the lag is the piece's own (what `lag_at` gives at τ = 0).
+                let lag = if tau == 0.0 {
+                    work.piece.lag
+                } else {
+                    r.lag_at(&work.piece.lag, seg.a, tau)
+                };
                 (p + lag.e, v + lag.de, r.acceleration(&lag), false)
             }
             None => {
