@@ -147,7 +147,11 @@ fn annotate_keeps_every_input_byte_and_is_idempotent() {
         &once.display().to_string(),
     ]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    assert!(stdout(&o).contains("WARNING"), "{}", stdout(&o));
+    assert!(
+        stderr(&o).starts_with("delta-gcode: FAIL: "),
+        "{}",
+        stderr(&o)
+    );
     let annotated = fs::read(&once).unwrap();
     let original = fs::read(&input).unwrap();
     assert_ne!(annotated, original);
@@ -254,7 +258,12 @@ fn slicer_hook_as_prusaslicer_runs_it() {
         "a non-zero exit aborts the export: {}",
         stderr(&o)
     );
-    assert!(stdout(&o).contains("WARNING"));
+    // The verdict first on stderr (what PrusaSlicer shows of a hook that fails).
+    assert!(
+        stderr(&o).starts_with("delta-gcode: FAIL: "),
+        "{}",
+        stderr(&o)
+    );
     let annotated = fs::read(&file).unwrap();
     assert_eq!(strip_ours(&annotated), original);
     assert!(String::from_utf8_lossy(&annotated).contains("; delta-gcode: OVER force"));

@@ -39,7 +39,7 @@ fn imported_profile_with_masses_is_accepted() {
         "{}",
         stdout(&m)
     );
-    // The Q5's geometry, as shipped in machines/flsun-q5.yaml.
+    // The Q5's geometry, as shipped in machines/flsun-q5-klipper.yaml.
     let text = fs::read_to_string(&out).unwrap();
     assert!(text.contains("delta_radius_mm: 107.5"), "{text}");
     let cube = repo("samples/calib-cube_cura413_kossel-mini.gcode")

@@ -1,15 +1,20 @@
-//! Every shipped machine profile loads, and the shipped calibration cube checks on it.
+//! Every shipped machine profile loads, and every shipped sample checks on it.
 
 mod common;
 
 use common::*;
 
 #[test]
-fn every_shipped_profile_is_valid_and_checks_the_cube() {
-    let cube = repo("samples/calib-cube_cura413_kossel-mini.gcode")
-        .display()
-        .to_string();
+fn every_shipped_profile_is_valid_and_checks_every_sample() {
+    let samples: Vec<String> = std::fs::read_dir(repo("samples"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "gcode"))
+        .map(|p| p.display().to_string())
+        .collect();
+    assert!(samples.len() >= 5, "{samples:?}");
     let mut n = 0;
+    let mut marlin = 0;
     for entry in std::fs::read_dir(repo("machines")).unwrap() {
         let path = entry.unwrap().path();
         if path.extension().is_none_or(|e| e != "yaml") {
@@ -19,16 +24,47 @@ fn every_shipped_profile_is_valid_and_checks_the_cube() {
         let p = path.display().to_string();
         let m = run(&["machine", &p]);
         assert_eq!(m.status.code(), Some(0), "{p}: {}", stderr(&m));
-        let c = run(&["check", &cube, "-m", &p, "--format", "json"]);
+        if stdout(&m).contains("\nfirmware: marlin:") {
+            marlin += 1;
+        }
+        for sample in &samples {
+            // Exit 0 or 1 (a verdict), never 2 (an input or profile error).
+            let c = run(&["check", sample, "-m", &p, "--format", "json"]);
+            assert!(
+                matches!(c.status.code(), Some(0 | 1)),
+                "{p} {sample}: {}",
+                stderr(&c)
+            );
+            let v: serde_json::Value = serde_json::from_slice(&c.stdout).unwrap();
+            let moves = v["summary"]["moves"].as_u64().unwrap_or(0);
+            assert!(moves > 0, "{p} {sample}");
+            if sample.ends_with("calib-cube_cura413_kossel-mini.gcode") {
+                assert!(moves > 8000, "{p}: {moves} moves");
+            }
+        }
+    }
+    assert!(n >= 8, "{n} profiles");
+    // The FLSUN Q5 and the Kossel Linear Plus with their Marlin settings.
+    assert!(marlin >= 2, "{marlin} Marlin profiles");
+}
+
+#[test]
+fn marlin_profiles_check_a_real_marlin_file() {
+    // The FLSUN Q5's own start code (a Marlin file: the helix G3) on both Marlin profiles.
+    let q5 = repo("tests/fixtures/flsun_q5_start.gcode")
+        .display()
+        .to_string();
+    for m in ["flsun-q5.yaml", "anycubic-kossel-linear-plus.yaml"] {
+        let p = repo(&format!("machines/{m}")).display().to_string();
+        let c = run(&["check", &q5, "-m", &p, "--format", "json"]);
         assert!(
             matches!(c.status.code(), Some(0 | 1)),
-            "{p}: {}",
+            "{m}: {}",
             stderr(&c)
         );
         let v: serde_json::Value = serde_json::from_slice(&c.stdout).unwrap();
-        assert!(v["summary"]["moves"].as_u64().unwrap_or(0) > 8000, "{p}");
+        assert!(v["summary"]["moves"].as_u64().unwrap_or(0) > 100, "{m}");
     }
-    assert!(n >= 6, "{n} profiles");
 }
 
 /// A profile with every new key: a Marlin firmware, arcs, a shaper, the LDO motor with its

@@ -156,6 +156,50 @@ fn bunny_head_warns_only_about_m204_p() {
     );
 }
 
+/// The real slicer files' pieces (copied from /work/shared/corpus into tests/fixtures):
+/// read without an error, every move finite with a positive feed. (This replaced an
+/// ignored test over the whole decompressed corpus.)
+#[test]
+fn every_fixture_reads_without_errors_into_finite_moves() {
+    for name in [
+        "flsun_q5_start.gcode",
+        "ps29_arcs_exclude.gcode",
+        "cura413_header.gcode",
+        "ps25_bunny_head.gcode",
+    ] {
+        let (ev, d, stats) = read(&fixture(name));
+        assert!(errors(&d).is_empty(), "{name}: {d:#?}");
+        assert!(stats.moves > 50, "{name}: {stats:?}");
+        for e in ev {
+            if let Event::Move(m) = e {
+                let p = m.path;
+                let finite = p
+                    .start()
+                    .iter()
+                    .chain(p.end().iter())
+                    .all(|v| v.is_finite());
+                assert!(finite && m.e_mm.is_finite(), "{name}: {m:?}");
+                assert!(
+                    m.feed_mm_s.is_finite() && m.feed_mm_s > 0.0,
+                    "{name}: {m:?}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn object_labels_and_display_text_raise_nothing() {
+    // PrusaSlicer's object labels (M486 A…), Klipper's EXCLUDE_OBJECT_*, M117 text.
+    let src = b"M486 T3\nM486 S0\nM486 Acylinder_d40.stl\nM486 S-1\n\
+        EXCLUDE_OBJECT_DEFINE NAME=cylinder_d40.stl_id_0_copy_0 CENTER=0,0 POLYGON=[[-20,-20],[20,-20],[20,20]]\n\
+        EXCLUDE_OBJECT_START NAME=cylinder_d40.stl_id_0_copy_0\nM117 Layer 1 of 20 X1 D5 L2 _\n\
+        EXCLUDE_OBJECT_END NAME='plate 1'\nG1 X1 F600\n";
+    let (ev, d, _) = read(src);
+    assert!(d.is_empty(), "{d:#?}");
+    assert_eq!(ev.len(), 1);
+}
+
 #[test]
 fn thumbnail_block_is_comments() {
     let src =

@@ -208,9 +208,7 @@ fn check_pipeline(data: &[u8], machine: &Machine, trace: bool) {
     let mut moves = 0;
     // The verdict alone, or with the trace rows and a plot window as well.
     let observer = trace.then_some((
-        TraceRows {
-            motors: &machine.motors,
-        },
+        TraceRows::new(&machine.motors),
         Window {
             from_s: 0.0,
             to_s: 1.0,

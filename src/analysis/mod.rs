@@ -13,10 +13,10 @@ use indicatif::ProgressBar;
 use rayon::prelude::*;
 
 use crate::firmware;
-use crate::gcode::{self, Diagnostic, Event, ReadStats, Severity};
-use crate::machine::Machine;
+use crate::gcode::{self, Diagnostic, Event, ReadStats};
+use crate::machine::{Firmware, Machine};
 use crate::path::Vec3;
-use crate::report::{MAX_LISTED, MoveStats, Report};
+use crate::report::{DiagnosticLog, MoveStats, Report};
 
 mod move_check;
 mod observe;
@@ -26,7 +26,7 @@ mod trace;
 pub use move_check::{MoveChecker, Scratch};
 pub use observe::{Evaluated, Observer, Verdict, Window};
 pub use sequence::{Batch, MoveWork, Sequencer};
-pub use trace::{TraceRow, TraceRows, trace_header};
+pub use trace::{TraceRow, TraceRows, TraceWindow, trace_header};
 
 /// The progress bar's move count is updated this often.
 const PROGRESS_EVERY_MOVES: u64 = 4096;
@@ -130,7 +130,7 @@ fn sequence_recycling<R: Read>(
     input: R,
     machine: &Machine,
     batch_pieces: usize,
-    on_diag: impl FnMut(Diagnostic),
+    mut on_diag: impl FnMut(Diagnostic),
     mut on_batch: impl FnMut(Batch),
     mut spare: impl FnMut() -> Option<Batch>,
 ) -> io::Result<RunTotals> {
@@ -158,7 +158,11 @@ fn sequence_recycling<R: Read>(
                 on_batch(sequencer.take_batch(false));
             }
         },
-        on_diag,
+        |d| {
+            if for_firmware(&machine.firmware, &d) {
+                on_diag(d);
+            }
+        },
     );
     firmware.finish(&mut commanded);
     for c in commanded.drain(..) {
@@ -170,6 +174,16 @@ fn sequence_recycling<R: Read>(
         read: read?,
         print_time_s: sequencer.commanded_span_s(),
     })
+}
+
+/// Whether a diagnostic of the reader holds for the profile's firmware: the one place
+/// where the reader's words, written for Klipper, are sorted by firmware. Marlin honours
+/// `M204 P` and `T` (print and travel acceleration), which Klipper ignores one at a time.
+pub fn for_firmware(firmware: &Firmware, d: &Diagnostic) -> bool {
+    match firmware {
+        Firmware::Klipper => true,
+        Firmware::Marlin(_) => d.message != gcode::M204_P_OR_T_IGNORED,
+    }
 }
 
 /// The parallel stage.
@@ -222,10 +236,9 @@ pub fn check_file(
     let name = path.display().to_string();
     let mut report = Report::new(&name, &machine.name, machine.motors.max_force_n, all_moves);
     report.arm_magnet_hold_n = machine.geometry.arm_magnet_hold_n;
-    // The reader's diagnostics: the first MAX_LISTED kept, the others only counted, so a file
-    // with a warning on every line does not fill the memory.
-    let mut diags = Vec::new();
-    let (mut unlisted_warnings, mut unlisted_errors) = (0, 0);
+    // The reader's diagnostics: the first MAX_LISTED kept, all counted and grouped by kind,
+    // so a file with a warning on every line does not fill the memory.
+    let mut diags = DiagnosticLog::default();
     let input = ProgressReader {
         inner: file,
         bar: progress,
@@ -236,24 +249,18 @@ pub fn check_file(
         (),
         |r| {
             report.add_move(&r.stats);
+            report.add_end_xy(r.end_xy_mm, machine.geometry.print_radius_mm);
             if let Some(bar) = progress
                 && report.summary.moves.is_multiple_of(PROGRESS_EVERY_MOVES)
             {
                 bar.set_message(format!("{} moves", report.summary.moves));
             }
         },
-        |d| match d.severity {
-            _ if diags.len() < MAX_LISTED => diags.push(d),
-            Severity::Warning => unlisted_warnings += 1,
-            Severity::Error => unlisted_errors += 1,
-        },
+        |d| diags.push(d),
     )
     .with_context(|| format!("cannot read {name}"))?;
-    for d in &diags {
-        report.add_diagnostic(d);
-    }
-    report.summary.warnings += unlisted_warnings;
-    report.summary.errors += unlisted_errors;
+    report.add_diagnostics(diags);
+    report.note_footprint(machine.geometry.print_radius_mm);
     report.summary.lines = totals.read.lines;
     report.summary.print_time_s = totals.print_time_s;
     let lines = report.violation_lines();

@@ -371,9 +371,7 @@ mod tests {
     fn moves_sharing_blocks_and_batches_get_what_they_get_alone() {
         let (machine, gcode) = setup();
         let observer = (
-            TraceRows {
-                motors: &machine.motors,
-            },
+            TraceRows::new(&machine.motors),
             Window {
                 from_s: 0.05,
                 to_s: 1.5,

@@ -9,12 +9,17 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use anyhow::Context;
 
-use super::common::{Format, MachineArg, Progress, check_with_progress, print_diagnostics};
+use super::common::{
+    Format, MachineArg, Progress, VerboseArg, check_with_progress, print_diagnostics,
+};
+use super::input::{Input, stdin_at_most_once};
+use super::out::{say, stdout};
 use delta_gcode::report::{Report, write_github, write_json, write_text};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// G-code files to check (several run in parallel; reports come in this order)
+    /// G-code files to check (several run in parallel; reports come in this order); `-`
+    /// reads standard input
     #[arg(required = true, value_name = "FILE")]
     pub files: Vec<PathBuf>,
     #[command(flatten)]
@@ -28,6 +33,8 @@ pub struct Args {
     /// No progress bar
     #[arg(long, short)]
     pub quiet: bool,
+    #[command(flatten)]
+    pub verbose: VerboseArg,
     /// Write SVG plots into DIR: each file's tower forces around its worst moment
     /// (STEM-forces.svg) and a map of the bed by peak-force use (STEM-bed.svg)
     #[arg(long, value_name = "DIR")]
@@ -38,13 +45,23 @@ pub struct Args {
 pub const EXIT_VIOLATION: u8 = 1;
 
 pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
+    stdin_at_most_once(&args.files)?;
     let machine = args.machine.load()?;
     let progress = Progress::new(args.quiet);
-    let results = for_each_file_in_parallel(&args.files, |f| {
-        let report = check_with_progress(f, &machine, args.all_moves, &progress)?;
+    // Standard input is copied before the files are checked in parallel.
+    let inputs: Vec<anyhow::Result<Input>> = args.files.iter().map(|f| Input::open(f)).collect();
+    let results = for_each_file_in_parallel(&inputs, |input| {
+        let input = input.as_ref().map_err(|e| anyhow::anyhow!("{e:#}"))?;
+        let report = check_with_progress(
+            input,
+            &machine,
+            args.all_moves,
+            &progress,
+            args.verbose.verbose,
+        )?;
         if let Some(dir) = &args.plot {
-            super::check_plots::write_plots(f, &machine, &report, dir)
-                .with_context(|| format!("plotting {}", f.display()))?;
+            super::check_plots::write_plots(input, &machine, &report, dir)
+                .with_context(|| format!("plotting {}", input.name))?;
         }
         Ok(report)
     });
@@ -57,12 +74,12 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
                 reports.push(r);
             }
             Err(e) => {
-                eprintln!("delta-gcode: error: {e:#}");
+                say!("delta-gcode: error: {e:#}");
                 input_error = true;
             }
         }
     }
-    let mut out = std::io::stdout().lock();
+    let mut out = stdout();
     match args.format {
         Format::Json => write_json(&mut out, &reports)?,
         Format::Text => {
@@ -70,7 +87,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
                 if i > 0 {
                     writeln!(out)?;
                 }
-                print_diagnostics(r);
+                print_diagnostics(r, args.verbose.verbose);
                 write_text(&mut out, r)?;
             }
         }
@@ -95,9 +112,9 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
 /// Not on the rayon pool: each file's pipeline blocks on its channel and its model thread,
 /// which itself needs the rayon pool; files on the pool could take every worker and wait
 /// forever.
-fn for_each_file_in_parallel(
-    files: &[PathBuf],
-    check: impl Fn(&PathBuf) -> anyhow::Result<Report> + Sync,
+fn for_each_file_in_parallel<F: Sync>(
+    files: &[F],
+    check: impl Fn(&F) -> anyhow::Result<Report> + Sync,
 ) -> Vec<anyhow::Result<Report>> {
     let workers = std::thread::available_parallelism()
         .map_or(1, |n| n.get())

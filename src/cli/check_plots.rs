@@ -7,6 +7,7 @@ use std::path::Path;
 
 use anyhow::Context;
 
+use super::input::Input;
 use delta_gcode::analysis::{Window, run};
 use delta_gcode::machine::Machine;
 use delta_gcode::plot::{bed_map_svg, force_time_svg};
@@ -22,16 +23,13 @@ const GRID: usize = 120;
 /// Writes `DIR/STEM-forces.svg` and `DIR/STEM-bed.svg` for a checked file (a second pass
 /// over it collects the samples around the worst moment and the bed map).
 pub fn write_plots(
-    file: &Path,
+    input: &Input,
     machine: &Machine,
     report: &Report,
     dir: &Path,
 ) -> anyhow::Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    let stem = file
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
+    let (file, stem) = (&input.path, input.stem());
     let limit = machine.motors.max_force_n;
     // The worst moment: the first of the worst violations, else the highest peak.
     let s = &report.summary;

@@ -6,14 +6,16 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 
+use super::input::Input;
+use super::out::say;
 use delta_gcode::machine::Machine;
-use delta_gcode::report::Report;
+use delta_gcode::report::{DiagnosticKind, Report, severity_name};
 
 /// Files smaller than this get no progress bar: they are done before it would be seen.
 const PROGRESS_MIN_BYTES: u64 = 8 << 20;
 
-/// How many diagnostics of a file are printed to stderr; all are in the JSON report.
-const DIAGNOSTICS_SHOWN: usize = 20;
+/// How many diagnostics of a file `--verbose` prints to stderr; all are in the JSON report.
+const DIAGNOSTICS_SHOWN: usize = 1000;
 
 /// Output formats: text for a person, JSON for scripts, GitHub Actions workflow commands
 /// for CI annotations (file reports only: `check`).
@@ -60,8 +62,9 @@ impl Progress {
         }
     }
 
-    /// A bar over the bytes of `path`, if it is large enough to be worth one.
-    pub fn bar(&self, path: &Path) -> Option<ProgressBar> {
+    /// A bar over the bytes of `path` (reported as `name`), if it is large enough to be
+    /// worth one.
+    pub fn bar(&self, path: &Path, name: &str) -> Option<ProgressBar> {
         let multi = self.multi.as_ref()?;
         let len = std::fs::metadata(path).ok()?.len();
         if len < PROGRESS_MIN_BYTES {
@@ -73,41 +76,95 @@ impl Progress {
         .ok()?
         .progress_chars("=> ");
         let bar = multi.add(ProgressBar::new(len).with_style(style));
-        bar.set_prefix(path.display().to_string());
+        bar.set_prefix(name.to_string());
         Some(bar)
     }
 }
 
-/// Prints a file's diagnostics to stderr as `file:line:column: severity: message`.
-pub fn print_diagnostics(report: &Report) {
-    for d in report.diagnostics.iter().take(DIAGNOSTICS_SHOWN) {
-        eprintln!(
-            "{}:{}:{}: {}: {}",
-            report.file, d.line, d.column, d.severity, d.message
-        );
+/// The `--verbose` option of the file commands.
+#[derive(clap::Args, Debug)]
+pub struct VerboseArg {
+    /// List every diagnostic (up to 1000) instead of one line per kind
+    #[arg(long, short)]
+    pub verbose: bool,
+}
+
+/// Prints a file's diagnostics to stderr as `file:line:column: severity: message`: one
+/// line per kind, with its count and first lines, or (`verbose`) each of them.
+pub fn print_diagnostics(report: &Report, verbose: bool) {
+    if verbose {
+        for d in report.diagnostics.iter().take(DIAGNOSTICS_SHOWN) {
+            say!(
+                "{}:{}:{}: {}: {}",
+                report.file,
+                d.line,
+                d.column,
+                d.severity,
+                d.message
+            );
+        }
+        let total = (report.summary.warnings + report.summary.errors) as usize;
+        if total > DIAGNOSTICS_SHOWN {
+            say!(
+                "{}: … and {} more diagnostics (all counted in the JSON report's diagnostic_kinds)",
+                report.file,
+                total - DIAGNOSTICS_SHOWN
+            );
+        }
+        return;
     }
-    let total = (report.summary.warnings + report.summary.errors) as usize;
-    if total > DIAGNOSTICS_SHOWN {
-        eprintln!(
-            "{}: … and {} more diagnostics",
-            report.file,
-            total - DIAGNOSTICS_SHOWN
-        );
+    for k in report.diagnostic_kinds.as_slice() {
+        say!("{}", diagnostic_kind_line(&report.file, k));
     }
 }
 
-/// Checks a file with a progress bar of its own.
+/// One kind of diagnostic in one line: the first one's place and message, then how many
+/// there are and their first lines.
+pub fn diagnostic_kind_line(file: &str, k: &DiagnosticKind) -> String {
+    let first = k.lines.first().copied().unwrap_or(0);
+    let mut line = format!(
+        "{file}:{first}:{}: {}: {}",
+        k.column,
+        severity_name(k.severity),
+        k.message
+    );
+    if k.count > 1 {
+        let lines: Vec<String> = k.lines.iter().map(u64::to_string).collect();
+        let more = if k.count > k.lines.len() as u64 {
+            ", …"
+        } else {
+            ""
+        };
+        line += &format!(
+            " [{} times: lines {}{more}; --verbose lists each]",
+            k.count,
+            lines.join(", ")
+        );
+    }
+    line
+}
+
+/// Checks a file with a progress bar of its own; a file without a single move is an
+/// input error (a gate must not pass a file it did not check), its diagnostics printed
+/// first (`verbose`: each).
 pub fn check_with_progress(
-    path: &Path,
+    input: &Input,
     machine: &Machine,
     all_moves: bool,
     progress: &Progress,
+    verbose: bool,
 ) -> anyhow::Result<Report> {
-    let bar = progress.bar(path);
-    let report = delta_gcode::analysis::check_file(path, machine, all_moves, bar.as_ref())
-        .with_context(|| format!("checking {}", path.display()));
+    let bar = progress.bar(&input.path, &input.name);
+    let report = delta_gcode::analysis::check_file(&input.path, machine, all_moves, bar.as_ref())
+        .with_context(|| format!("checking {}", input.name));
     if let Some(bar) = bar {
         bar.finish_and_clear();
     }
-    report
+    let mut report = report?;
+    report.file.clone_from(&input.name);
+    if report.summary.moves == 0 {
+        print_diagnostics(&report, verbose);
+        input.refuse_no_motion(report.summary.lines, report.summary.errors)?;
+    }
+    Ok(report)
 }

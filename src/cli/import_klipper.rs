@@ -8,6 +8,7 @@ use std::process::ExitCode;
 
 use anyhow::Context;
 
+use super::out::say;
 use super::replace::replace_file;
 use delta_gcode::klipper_import::{ImportExtras, import_klipper};
 
@@ -53,10 +54,10 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         None => std::io::stdout().write_all(imported.yaml.as_bytes())?,
     }
     for note in &imported.notes {
-        eprintln!("delta-gcode: note: {note}");
+        say!("delta-gcode: note: {note}");
     }
     if !imported.missing.is_empty() {
-        eprintln!(
+        say!(
             "delta-gcode: the profile is incomplete, missing {}: `check` refuses it until they \
              are added (--cart-kg, --link-kg, --platform-kg; for the motors --max-force-n, or \
              `model` and `safety_factor` in the file)",

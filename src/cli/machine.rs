@@ -7,6 +7,7 @@ use anyhow::Context;
 use serde_json::{Value, json};
 
 use super::common::{Format, text_or_json};
+use super::out::put;
 use delta_gcode::delta::TOWER_NAMES;
 use delta_gcode::machine::defaults::{self, SLOW_RATIO};
 use delta_gcode::machine::{DefaultDrive, Firmware, Machine};
@@ -94,13 +95,13 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
                 "drive": drive_json(&machine),
                 "motor": motor_json(&machine),
             });
-            println!("{v}");
+            put!("{v}");
         }
         Format::Text | Format::Github => {
             let l = &machine.limits;
             let e = &machine.extruder;
-            println!("{}: profile OK ({})", machine.name, profile.display());
-            println!(
+            put!("{}: profile OK ({})", machine.name, profile.display());
+            put!(
                 "geometry: delta radius {:.3} mm, arms {:.3}/{:.3}/{:.3} mm, nozzle offset {:.3} mm",
                 g.delta_radius_mm,
                 g.arm_length_mm[0],
@@ -108,29 +109,36 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
                 g.arm_length_mm[2],
                 g.nozzle_offset_mm
             );
-            println!(
+            put!(
                 "reachable radius: {reach_bed:.2} mm at the bed, {reach_home:.2} mm at home z = {:.2} mm; \
                  the print disc (r = {:.2} mm) is whole up to z = {full_disc_top:.2} mm",
-                g.home_z_mm, g.print_radius_mm
+                g.home_z_mm,
+                g.print_radius_mm
             );
-            println!(
+            put!(
                 "home carriages: {:.3} / {:.3} / {:.3} mm (towers A/B/C)",
-                home_q[0], home_q[1], home_q[2]
+                home_q[0],
+                home_q[1],
+                home_q[2]
             );
-            println!(
+            put!(
                 "static force at the centre (eq. 16): {:.3} / {:.3} / {:.3} N",
-                centre[0], centre[1], centre[2]
+                centre[0],
+                centre[1],
+                centre[2]
             );
-            println!(
+            put!(
                 "largest static force on the print disc (eq. 15): {max_static:.3} N, tower {} at ({:.1}, {:.1}) mm",
-                TOWER_NAMES[max_tower], max_at.x, max_at.y
+                TOWER_NAMES[max_tower],
+                max_at.x,
+                max_at.y
             );
-            println!("suspended weight (eq. 17): {weight:.3} N");
-            println!(
+            put!("suspended weight (eq. 17): {weight:.3} N");
+            put!(
                 "edge slowdown (Klipper delta.py){}: half speed beyond r = {slow:.2} mm, quarter beyond r = {very_slow:.2} mm",
                 if l.edge_slowdown { "" } else { ", disabled" }
             );
-            println!(
+            put!(
                 "limits: {} mm/s, {} mm/s², z {} mm/s, {} mm/s², square corner {} mm/s, min cruise ratio {}",
                 l.max_velocity_mm_s,
                 l.max_accel_mm_s2,
@@ -139,13 +147,13 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
                 l.square_corner_velocity_mm_s,
                 l.minimum_cruise_ratio
             );
-            println!(
+            put!(
                 "extruder: extrude-only {:.2} mm/s, {:.1} mm/s², corner {} mm/s",
                 e.max_extrude_only_velocity_mm_s,
                 e.max_extrude_only_accel_mm_s2,
                 e.instantaneous_corner_velocity_mm_s
             );
-            println!(
+            put!(
                 "motor limit: {limit:.2} N per carriage ({:.0} % used by the worst static pose); rotor mass seen at the belt {:.4} kg; sampling {} s; g = {} m/s²",
                 100.0 * max_static / limit,
                 machine.motors.reflected_mass_kg,
@@ -169,10 +177,10 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
 /// The text lines of the firmware, arcs, shaper, drive and motor, after the others.
 fn print_additions(machine: &Machine) {
     match &machine.firmware {
-        Firmware::Klipper => println!("firmware: klipper"),
+        Firmware::Klipper => put!("firmware: klipper"),
         Firmware::Marlin(m) => {
             let list = |v: [f64; 4]| format!("{}/{}/{} (E {})", v[0], v[1], v[2], v[3]);
-            println!(
+            put!(
                 "firmware: marlin: {} steps/mm (E {}), {} segments/s, max feedrate {} mm/s, \
                  max accel {} mm/s², accel print {} / retract {} / travel {} mm/s², jerk {} \
                  mm/s, S-curve {}, {} blocks, min {} steps/segment, min segment time {} µs, \
@@ -195,7 +203,7 @@ fn print_additions(machine: &Machine) {
         }
     }
     let delta_gcode::gcode::ArcRules::Klipper { resolution_mm } = machine.arc_rules;
-    println!("arcs: Klipper's [gcode_arcs], chords of {resolution_mm} mm");
+    put!("arcs: Klipper's [gcode_arcs], chords of {resolution_mm} mm");
     let shaper = |s: Option<AxisShaper>| {
         s.map_or_else(
             || "off".to_string(),
@@ -210,17 +218,17 @@ fn print_additions(machine: &Machine) {
         )
     };
     let sh = &machine.input_shaper;
-    println!("input shaper: x {}; y {}", shaper(sh.x), shaper(sh.y));
-    println!("drive: {}", drive_text(machine));
+    put!("input shaper: x {}; y {}", shaper(sh.x), shaper(sh.y));
+    put!("drive: {}", drive_text(machine));
     let m = &machine.motors;
     let motor = m.model.map_or_else(String::new, |n| format!("{n}, "));
     match &m.curve {
-        None => println!(
+        None => put!(
             "motor: {motor}{:.2} N at any carriage speed (no electrical figures)",
             m.max_force_n
         ),
         Some(c) => {
-            println!(
+            put!(
                 "motor: {motor}force at carriage speed (current-chopped stepper model), knee \
                  {:.2} mm/s, zero force at {:.2} mm/s",
                 c.knee_speed_mm_s(),
@@ -234,8 +242,8 @@ fn print_additions(machine: &Machine) {
                 .iter()
                 .map(|&v| format!("{:>8.2}", c.available_force_n(v)))
                 .collect();
-            println!("  carriage speed mm/s {}", speeds.join(""));
-            println!("  force N             {}", forces.join(""));
+            put!("  carriage speed mm/s {}", speeds.join(""));
+            put!("  force N             {}", forces.join(""));
         }
     }
 }

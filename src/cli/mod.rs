@@ -5,7 +5,9 @@ mod check;
 mod check_plots;
 mod common;
 mod import_klipper;
+mod input;
 mod machine;
+mod out;
 mod plot;
 mod pose;
 mod replace;
@@ -14,6 +16,7 @@ mod trace;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+use out::say;
 
 /// Finds the moves in delta-printer G-code that ask a carriage motor for more force than
 /// it can give.
@@ -66,7 +69,7 @@ pub fn main() -> ExitCode {
     match result {
         Ok(code) => code,
         Err(e) => {
-            eprintln!("delta-gcode: error: {e:#}");
+            say!("delta-gcode: error: {e:#}");
             ExitCode::from(EXIT_ERROR)
         }
     }

@@ -7,6 +7,7 @@ use anyhow::Context;
 use serde_json::json;
 
 use super::common::{Format, MachineArg, text_or_json};
+use super::out::put;
 use delta_gcode::delta::TOWER_NAMES;
 use delta_gcode::path::Vec3;
 
@@ -66,11 +67,11 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
             .forward(q)
             .context("the carriage heights have no nozzle position")?;
         match args.format {
-            Format::Json => println!("{}", json!({"q_mm": q, "position_mm": [p.x, p.y, p.z]})),
+            Format::Json => put!("{}", json!({"q_mm": q, "position_mm": [p.x, p.y, p.z]})),
             Format::Text | Format::Github => {
-                println!("machine: {}", machine.name);
-                println!("carriages (mm): {:.4} {:.4} {:.4}", q[0], q[1], q[2]);
-                println!("position_mm: x {:.4}  y {:.4}  z {:.4}", p.x, p.y, p.z);
+                put!("machine: {}", machine.name);
+                put!("carriages (mm): {:.4} {:.4} {:.4}", q[0], q[1], q[2]);
+                put!("position_mm: x {:.4}  y {:.4}  z {:.4}", p.x, p.y, p.z);
             }
         }
         return Ok(ExitCode::SUCCESS);
@@ -102,17 +103,25 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
                 state: &s,
                 available_force_n: available,
             };
-            println!("{}", serde_json::to_string(&out)?);
+            put!("{}", serde_json::to_string(&out)?);
         }
         Format::Text | Format::Github => {
-            println!("machine: {}", machine.name);
-            println!(
+            put!("machine: {}", machine.name);
+            put!(
                 "nozzle mm: {x:.4} {y:.4} {z:.4}   mm/s: {:.3} {:.3} {:.3}   mm/s²: {:.1} {:.1} {:.1}",
-                vel.x, vel.y, vel.z, acc.x, acc.y, acc.z
+                vel.x,
+                vel.y,
+                vel.z,
+                acc.x,
+                acc.y,
+                acc.z
             );
-            println!(
+            put!(
                 "{:<22}{:>14}{:>14}{:>14}",
-                "tower", TOWER_NAMES[0], TOWER_NAMES[1], TOWER_NAMES[2]
+                "tower",
+                TOWER_NAMES[0],
+                TOWER_NAMES[1],
+                TOWER_NAMES[2]
             );
             let rows: [(&str, [f64; 3]); 7] = [
                 ("carriage q (mm)", s.q_mm),
@@ -124,20 +133,22 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
                 ("arm tension (N)", s.arm_tension_n),
             ];
             for (label, v) in rows {
-                println!("{label:<22}{:>14.4}{:>14.4}{:>14.4}", v[0], v[1], v[2]);
+                put!("{label:<22}{:>14.4}{:>14.4}{:>14.4}", v[0], v[1], v[2]);
             }
-            println!(
+            put!(
                 "power ΣQ·dq: {:.6} W   d(K+U)/dt: {:.6} W",
-                s.power_w, s.energy_rate_w
+                s.power_w,
+                s.energy_rate_w
             );
-            println!(
+            put!(
                 "kinetic: {:.6} J   potential: {:.6} J",
-                s.kinetic_j, s.potential_j
+                s.kinetic_j,
+                s.potential_j
             );
-            println!("Jx condition (Frobenius): {:.3}", s.jx_condition);
+            put!("Jx condition (Frobenius): {:.3}", s.jx_condition);
             let limit = machine.motors.max_force_n;
             if s.force_n.iter().any(|f| f.abs() > limit) {
-                println!("over the motor limit of {limit} N");
+                put!("over the motor limit of {limit} N");
             }
         }
     }

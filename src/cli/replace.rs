@@ -1,6 +1,6 @@
 //! Writing an output file so that it is either wholly replaced or untouched: a temporary
-//! file in the same directory, flushed and synced, given the original's permissions, then
-//! renamed over the target.
+//! file in the same directory, flushed and synced, given the original's permissions (a new
+//! file: 0666 less the umask, as any program creates one), then renamed over the target.
 
 use std::fs;
 use std::io::{self, BufWriter, Write};
@@ -31,9 +31,16 @@ pub fn replace_file(
         .unwrap_or_default();
     let prefix = format!(".{name}.");
     remove_stale(dir, &prefix);
-    let tmp = tempfile::Builder::new()
-        .prefix(&prefix)
-        .suffix(TMP_SUFFIX)
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(&prefix).suffix(TMP_SUFFIX);
+    // A new file gets the mode any program gives it (0666 less the umask), not the 0600 of
+    // a temporary file; a replaced one keeps its own (below).
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(fs::Permissions::from_mode(0o666));
+    }
+    let tmp = builder
         .tempfile_in(dir)
         .with_context(|| format!("cannot create a temporary file in {}", dir.display()))?;
     let mut out = BufWriter::with_capacity(1 << 16, tmp);

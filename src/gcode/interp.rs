@@ -551,6 +551,11 @@ impl Interpreter {
     }
 }
 
+/// The warning of an M204 that Klipper ignores; Klipper's alone (Marlin honours P and T,
+/// `analysis::for_firmware`).
+pub const M204_P_OR_T_IGNORED: &str =
+    "M204 with only P or only T is ignored (Klipper needs S, or both P and T)";
+
 /// M204 as Klipper reads it: S sets the acceleration; without S both P and T are needed
 /// and the smaller is used; P or T alone is ignored with a warning.
 fn m204(p: &ParsedLine, column: u32, d: &mut Diags<impl FnMut(Diagnostic)>) -> LimitChange {
@@ -571,10 +576,7 @@ fn m204(p: &ParsedLine, column: u32, d: &mut Diags<impl FnMut(Diagnostic)>) -> L
         (Some(s), _, _) => s,
         (None, Some(Some(pv)), Some(Some(t))) => Some(pv.min(t)),
         (None, Some(_), None) | (None, None, Some(_)) => {
-            d.warn(
-                column,
-                "M204 with only P or only T is ignored (Klipper needs S, or both P and T)".into(),
-            );
+            d.warn(column, M204_P_OR_T_IGNORED.into());
             None
         }
         _ => None,

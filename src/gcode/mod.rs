@@ -6,14 +6,16 @@ mod event;
 mod interp;
 pub mod parse;
 pub mod reader;
+pub mod sniff;
 
 use std::io::Read;
 
 pub use arc::{ArcRules, Plane};
 pub use event::{Diagnostic, Event, LimitChange, Move, Severity};
-pub use interp::{DEFAULT_FEED_MM_MIN, Interpreter, ReadStats, Retraction};
+pub use interp::{DEFAULT_FEED_MM_MIN, Interpreter, M204_P_OR_T_IGNORED, ReadStats, Retraction};
 pub use parse::{Command, ParsedLine, Word, parse_line};
 pub use reader::{ChunkReader, Line, LineReader};
+pub use sniff::{NotGcode, SNIFF_BYTES, sniff};
 
 use crate::path::Vec3;
 

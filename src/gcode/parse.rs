@@ -16,7 +16,8 @@
 //! extended = { ws KEY "=" ( VALUE | '"' text '"' | "'" text "'" ) }
 //! number   = [ "+" | "-" ] digits [ "." digits ] | [ "+" | "-" ] "." digits
 //! ```
-//! `M117`/`M118` (and Marlin's file-name commands M23, M28, M30, M32, M928) take the rest
+//! `M117`/`M118`, M486 (object labels) and Marlin's file-name commands (M23, M28, M30, M32,
+//! M928) take the rest
 //! of the line up to `;` as free text, as Klipper reads them. A `*` followed by digits ends
 //! the command part: the checksum, XOR of every byte before the `*`.
 
@@ -256,9 +257,11 @@ impl<'a> ParsedLine<'a> {
     }
 }
 
-/// Commands whose argument is free text.
+/// Commands whose argument is free text. M486 (object cancelling) is among them: its
+/// `A` names an object (`M486 Acylinder_d40.stl`, PrusaSlicer), and none of its words moves
+/// the machine.
 fn takes_text(letter: u8, number: u32) -> bool {
-    letter == b'M' && matches!(number, 23 | 28 | 30 | 32 | 117 | 118 | 928)
+    letter == b'M' && matches!(number, 23 | 28 | 30 | 32 | 117 | 118 | 486 | 928)
 }
 
 /// Whether a malformed number is an error for this command (motion and positioning) or
@@ -525,6 +528,20 @@ mod tests {
         assert!(p.diags().is_empty());
         let p = parse_line(b"M118 E1 hello");
         assert_eq!(p.text, Some(&b"E1 hello"[..]));
+    }
+
+    #[test]
+    fn m486_object_labels_are_text() {
+        for line in [
+            &b"M486 Acylinder_d40.stl"[..],
+            b"M486 S0",
+            b"M486 S-1",
+            b"M486 T3",
+        ] {
+            let p = parse_line(line);
+            assert_eq!(code(&p), (b'M', 486));
+            assert!(p.diags().is_empty(), "{line:?}");
+        }
     }
 
     #[test]

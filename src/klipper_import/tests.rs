@@ -7,7 +7,7 @@ const KOSSEL: &str = include_str!("../../tests/fixtures/klipper/anycubic-kossel-
 const EDGE: &str = include_str!("../../tests/fixtures/klipper/edge-cases.cfg");
 const CARTESIAN: &str = include_str!("../../tests/fixtures/klipper/cartesian.cfg");
 const MOTION: &str = include_str!("../../tests/fixtures/klipper/motion-sections.cfg");
-const Q5_PROFILE: &str = include_str!("../../machines/flsun-q5.yaml");
+const Q5_PROFILE: &str = include_str!("../../machines/flsun-q5-klipper.yaml");
 
 fn parse(p: &ImportedProfile) -> Value {
     yaml_serde::from_str(&p.yaml).unwrap_or_else(|e| panic!("bad YAML {e}:\n{}", p.yaml))
@@ -136,8 +136,8 @@ fn bad_extra_is_an_error() {
 /// Klipper's Q5 configuration (both come from config/printer-flsun-q5-2020.cfg).
 #[test]
 fn shipped_q5_profile_agrees_with_the_import() {
-    let shipped: Value =
-        yaml_serde::from_str(Q5_PROFILE).unwrap_or_else(|e| panic!("machines/flsun-q5.yaml: {e}"));
+    let shipped: Value = yaml_serde::from_str(Q5_PROFILE)
+        .unwrap_or_else(|e| panic!("machines/flsun-q5-klipper.yaml: {e}"));
     let v = parse(&import(Q5, "q5.cfg"));
     for path in [
         "geometry.delta_radius_mm",

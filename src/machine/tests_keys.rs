@@ -648,7 +648,12 @@ fn shipped_drives_are_the_documented_derivation() {
             include_str!("../../machines/anycubic-kossel-linear-plus.yaml"),
             None,
         ),
+        (
+            include_str!("../../machines/anycubic-kossel-linear-plus-klipper.yaml"),
+            None,
+        ),
         (include_str!("../../machines/flsun-q5.yaml"), None),
+        (include_str!("../../machines/flsun-q5-klipper.yaml"), None),
         (
             include_str!("../../machines/flsun-qqs-pro.yaml"),
             Some((

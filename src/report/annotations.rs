@@ -65,6 +65,61 @@ pub fn summary_lines(report: &Report) -> Vec<String> {
     lines
 }
 
+/// The verdict in one line, for a slicer's hook (its first line on stderr): what failed, in
+/// how many moves, and the worst line; or the input errors; or that the file passes, with
+/// how many findings.
+pub fn verdict_line(report: &Report) -> String {
+    let (s, file, machine) = (&report.summary, &report.file, &report.machine);
+    let first_diag = |severity: &str| {
+        report
+            .diagnostics
+            .iter()
+            .find(|d| d.severity == severity)
+            .map_or_else(String::new, |d| {
+                format!(", first at line {}: {}", d.line, d.message)
+            })
+    };
+    if let Some(v) = report.worst_first().first() {
+        let text = v.command.trim_end();
+        let text = if text.is_empty() {
+            String::new()
+        } else {
+            format!(" `{text}`")
+        };
+        return format!(
+            "delta-gcode: FAIL: {file}: {} of {} moves exceed the limits of {machine}; worst: line {}{text}: {} {}",
+            s.violations,
+            s.moves,
+            v.line,
+            v.message,
+            context(v)
+        );
+    }
+    if s.errors > 0 {
+        return format!(
+            "delta-gcode: ERROR: {file}: {} input errors (those lines were skipped){}",
+            s.errors,
+            first_diag("error")
+        );
+    }
+    let use_ = s.peak_use.iter().copied().fold(0.0, f64::max);
+    let mut line = format!(
+        "delta-gcode: OK: {file}: all {} moves within the limits of {machine} (motor use at most {:.0}%)",
+        s.moves,
+        100.0 * use_
+    );
+    if s.warnings > 0 {
+        let kinds = report.diagnostic_kinds.as_slice().len();
+        line += &format!(
+            "; {} warnings ({kinds} {}){}",
+            s.warnings,
+            if kinds == 1 { "kind" } else { "kinds" },
+            first_diag("warning")
+        );
+    }
+    line
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

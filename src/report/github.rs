@@ -4,7 +4,7 @@
 use std::io::{self, Write};
 
 use super::annotations::context;
-use super::{Report, format_forces};
+use super::{Report, format_forces, severity_name};
 
 /// Escapes a workflow command's message (`%`, CR, LF).
 fn escape_data(s: &str) -> String {
@@ -29,19 +29,23 @@ pub fn write_github(out: &mut (impl Write + ?Sized), report: &Report) -> io::Res
             escape_data(&format!("{} {}", v.message, context(v)))
         )?;
     }
-    for d in &report.diagnostics {
+    // One annotation per kind of diagnostic, at its first line.
+    for k in report.diagnostic_kinds.as_slice() {
+        let times = match k.count {
+            1 => String::new(),
+            n => format!(" ({n} times, first lines {:?})", k.lines),
+        };
         writeln!(
             out,
-            "::{} file={file},line={},col={}::{}",
-            if d.severity == "error" {
-                "error"
-            } else {
-                "warning"
-            },
-            d.line,
-            d.column,
-            escape_data(&d.message)
+            "::{} file={file},line={},col={}::{}{times}",
+            severity_name(k.severity),
+            k.lines.first().copied().unwrap_or(0),
+            k.column,
+            escape_data(&k.message)
         )?;
+    }
+    for note in &report.notes {
+        writeln!(out, "::warning file={file}::{}", escape_data(note))?;
     }
     let s = &report.summary;
     writeln!(

@@ -2,11 +2,14 @@
 //! The writers only format a [`Report`]; they compute nothing.
 
 mod annotations;
+mod diagnostics;
+mod footprint;
 mod github;
 mod stats;
 mod text;
 
-pub use annotations::{annotations, summary_lines};
+pub use annotations::{annotations, summary_lines, verdict_line};
+pub use diagnostics::{DiagnosticKind, DiagnosticKinds, DiagnosticLog, KIND_LINES, severity_name};
 pub use github::write_github;
 pub use stats::{MoveStats, NEAR_SINGULAR_RATIO, Problem, RunForces, Worst};
 pub use text::write_text;
@@ -34,6 +37,14 @@ pub struct Report {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub moves: Option<Vec<MoveEntry>>,
     pub diagnostics: Vec<DiagnosticEntry>,
+    /// The diagnostics grouped by kind, each with its count and first lines.
+    pub diagnostic_kinds: DiagnosticKinds,
+    /// What the report says of the file as a whole (that it seems sliced for another
+    /// printer).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
+    #[serde(skip)]
+    footprint: footprint::Footprint,
 }
 
 #[derive(Clone, Debug, Default, Serialize)]
@@ -108,8 +119,10 @@ pub struct Violation {
     pub line: u64,
     pub kind: ViolationKind,
     /// Kind `force`: the force each tower needed at its worst instant (the one closest to,
-    /// or furthest beyond, what its motor gives); other kinds: the move's peak forces. N.
-    pub peak_force_n: [f64; 3],
+    /// or furthest beyond, what its motor gives); other kinds: the move's peak forces; none
+    /// for a move out of reach (`unreachable`, `above_home`). N.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub peak_force_n: Option<[f64; 3]>,
     /// Kind `force`: the force each motor could give at that instant, at that carriage
     /// speed, N.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -127,7 +140,9 @@ pub struct Violation {
 #[derive(Clone, Debug, Serialize)]
 pub struct MoveEntry {
     pub line: u64,
-    pub peak_force_n: [f64; 3],
+    /// None for a move out of reach.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub peak_force_n: Option<[f64; 3]>,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -149,15 +164,20 @@ impl Report {
             violations: Vec::new(),
             moves: all_moves.then(Vec::new),
             diagnostics: Vec::new(),
+            diagnostic_kinds: DiagnosticKinds::default(),
+            notes: Vec::new(),
+            footprint: footprint::Footprint::default(),
         }
     }
 
-    /// Takes one move's statistics, in file order.
+    /// Takes one move's statistics, in file order. A move out of reach adds no force: its
+    /// samples near the edge of the reach ask for forces that mean nothing.
     pub fn add_move(&mut self, m: &MoveStats) {
+        let reachable = !m.problem.as_ref().is_some_and(Problem::unreachable);
         let s = &mut self.summary;
         s.moves += 1;
         s.samples += m.samples;
-        for i in 0..3 {
+        for i in (0..3).filter(|_| reachable) {
             if m.peak_force_n[i] > s.peak_force_n[i] {
                 s.peak_force_n[i] = m.peak_force_n[i];
                 s.peak_line[i] = m.line;
@@ -172,10 +192,10 @@ impl Report {
         if let Some(moves) = &mut self.moves {
             moves.push(MoveEntry {
                 line: m.line,
-                peak_force_n: m.peak_force_n,
+                peak_force_n: reachable.then_some(m.peak_force_n),
             });
         }
-        if let Some((tower, ratio)) = m.near_singular {
+        if let Some((tower, ratio)) = m.near_singular.filter(|_| reachable) {
             let angle = (1.0 / ratio).atan().to_degrees();
             self.add_diagnostic(&Diagnostic {
                 line: m.line,
@@ -265,7 +285,7 @@ impl Report {
                 return Some(Violation {
                     line: m.line,
                     kind: ViolationKind::Force,
-                    peak_force_n: m.worst.map(|w| w.force_n),
+                    peak_force_n: Some(m.worst.map(|w| w.force_n)),
                     available_force_n: Some(m.worst.map(|w| w.available_n)),
                     tower: tower + 1,
                     t_s: w.t_s,
@@ -296,10 +316,11 @@ impl Report {
             }
         };
         let phase = m.peak_phase[worst];
+        let reachable = !m.problem.as_ref().is_some_and(Problem::unreachable);
         Some(Violation {
             line: m.line,
             kind,
-            peak_force_n: m.peak_force_n,
+            peak_force_n: reachable.then_some(m.peak_force_n),
             available_force_n: None,
             tower: tower + 1,
             t_s,
@@ -310,6 +331,22 @@ impl Report {
     }
 
     pub fn add_diagnostic(&mut self, d: &Diagnostic) {
+        self.diagnostic_kinds.add(d);
+        self.list_diagnostic(d);
+    }
+
+    /// Takes in the diagnostics of the reader (after the moves' own).
+    pub fn add_diagnostics(&mut self, log: DiagnosticLog) {
+        for d in &log.listed {
+            self.list_diagnostic(d);
+        }
+        self.summary.warnings += log.unlisted_warnings;
+        self.summary.errors += log.unlisted_errors;
+        self.diagnostic_kinds.merge(log.kinds);
+    }
+
+    /// Counts a diagnostic, and lists it while fewer than [`MAX_LISTED`] are.
+    fn list_diagnostic(&mut self, d: &Diagnostic) {
         match d.severity {
             Severity::Warning => self.summary.warnings += 1,
             Severity::Error => self.summary.errors += 1,
@@ -318,10 +355,7 @@ impl Report {
             self.diagnostics.push(DiagnosticEntry {
                 line: d.line,
                 column: d.column,
-                severity: match d.severity {
-                    Severity::Warning => "warning",
-                    Severity::Error => "error",
-                },
+                severity: diagnostics::severity_name(d.severity),
                 message: d.message.clone(),
             });
         }
@@ -350,11 +384,11 @@ impl Report {
     /// available.
     pub fn worst_first(&self) -> Vec<&Violation> {
         let mut v: Vec<&Violation> = self.violations.iter().collect();
-        let key = |v: &Violation| match v.available_force_n {
-            Some(a) => (0..3)
-                .map(|i| v.peak_force_n[i] / a[i].max(f64::MIN_POSITIVE))
+        let key = |v: &Violation| match (v.available_force_n, v.peak_force_n) {
+            (Some(a), Some(f)) => (0..3)
+                .map(|i| f[i] / a[i].max(f64::MIN_POSITIVE))
                 .fold(0.0_f64, f64::max),
-            None => f64::INFINITY,
+            _ => f64::INFINITY,
         };
         v.sort_by(|a, b| key(b).total_cmp(&key(a)).then(a.line.cmp(&b.line)));
         v
@@ -437,6 +471,9 @@ pub(crate) mod tests {
         assert_eq!(r.summary.peak_use_line, [20, 20, 10]);
         assert_eq!(r.violations[1].kind, ViolationKind::Unreachable);
         assert_eq!(r.violations[1].tower, 2);
+        // Out of reach: no forces, in the violation or in the summary.
+        assert_eq!(r.violations[1].peak_force_n, None);
+        assert_eq!(r.moves.as_ref().map(|m| m[2].peak_force_n), Some(None));
         assert!(r.failed());
         let worst: Vec<u64> = r.worst_first().iter().map(|v| v.line).collect();
         assert_eq!(worst, [30, 20]);

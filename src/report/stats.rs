@@ -45,6 +45,15 @@ impl Problem {
         }
     }
 
+    /// A pose the model cannot take (out of reach, a carriage above its top): the move's
+    /// forces mean nothing and are not reported.
+    pub fn unreachable(&self) -> bool {
+        matches!(
+            self,
+            Problem::Unreachable { .. } | Problem::AboveHome { .. }
+        )
+    }
+
     /// Rank among the problems of one move: the higher one is reported.
     fn severity(&self) -> u8 {
         match self {

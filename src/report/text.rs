@@ -41,6 +41,9 @@ pub fn write_text(out: &mut (impl Write + ?Sized), report: &Report) -> io::Resul
             report.file, s.moves, report.machine
         )?;
     }
+    for note in &report.notes {
+        writeln!(out, "  note: {note}")?;
+    }
     let worst = report.worst_first();
     if !worst.is_empty() {
         writeln!(out)?;
@@ -51,16 +54,16 @@ pub fn write_text(out: &mut (impl Write + ?Sized), report: &Report) -> io::Resul
         )?;
         for v in worst.iter().take(WORST_SHOWN) {
             let t = v.tower - 1;
-            let margin = match v.available_force_n {
-                Some(available) => format!("{:+.1} N", available[t] - v.peak_force_n[t]),
-                None => String::from("-"),
+            let margin = match (v.available_force_n, v.peak_force_n) {
+                (Some(available), Some(f)) => format!("{:+.1} N", available[t] - f[t]),
+                _ => String::from("-"),
             };
             let what = format!("{}: {}", v.message, v.command.trim_end());
             writeln!(
                 out,
                 "  {:>8}  {:<15}  {:>9}  {:<6}  {:>10.3}  {}",
                 v.line,
-                format_forces(&v.peak_force_n),
+                v.peak_force_n.as_ref().map_or("-".into(), format_forces),
                 margin,
                 v.phase.as_str(),
                 v.t_s,
