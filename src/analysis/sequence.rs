@@ -368,6 +368,38 @@ mod tests {
     }
 
     #[test]
+    fn batches_built_in_recycled_ones_are_the_same() {
+        // Each batch built in the memory of an earlier one, handed back still full: the
+        // same pieces and lines as batches built afresh.
+        let (machine, gcode) = setup();
+        let fresh = batches(&machine, &gcode, 7);
+        assert!(fresh.len() > 3, "{} batches", fresh.len());
+        let spares = std::cell::RefCell::new(Vec::new());
+        let mut recycled = Vec::new();
+        super::super::sequence_recycling(
+            gcode.as_bytes(),
+            &machine,
+            7,
+            |_| {},
+            |b| {
+                spares.borrow_mut().push(b.clone());
+                recycled.push(b);
+            },
+            || spares.borrow_mut().pop(),
+        )
+        .unwrap();
+        assert_eq!(recycled.len(), fresh.len());
+        for (k, (a, b)) in recycled.iter().zip(&fresh).enumerate() {
+            assert_eq!(
+                format!("{:?}", a.moves),
+                format!("{:?}", b.moves),
+                "batch {k}"
+            );
+            assert_eq!(a.pieces, b.pieces, "batch {k}");
+        }
+    }
+
+    #[test]
     fn moves_sharing_blocks_and_batches_get_what_they_get_alone() {
         let (machine, gcode) = setup();
         let observer = (
