@@ -97,6 +97,8 @@ pub fn run_edited<R: Read, O: Observer>(
     on_diag: impl FnMut(Diagnostic),
 ) -> io::Result<RunTotals> {
     let (to_model, batches) = mpsc::sync_channel::<Batch>(BATCHES_IN_FLIGHT);
+    // The batches done with go back to be filled again.
+    let (give_back, spares) = mpsc::channel::<Batch>();
     std::thread::scope(|scope| {
         let model = scope.spawn(move || {
             let mut stage = ModelStage {
@@ -105,6 +107,7 @@ pub fn run_edited<R: Read, O: Observer>(
             };
             for batch in batches {
                 stage.process(&batch, &mut on_move);
+                let _ = give_back.send(batch);
             }
             if let Some(last) = stage.pending.take() {
                 on_move(last);
@@ -112,9 +115,17 @@ pub fn run_edited<R: Read, O: Observer>(
         });
         // A send fails only when the model stage has stopped, and then its panic is
         // re-raised by the join below.
-        let totals = sequence_edited(input, machine, BATCH, edit, on_diag, |batch| {
-            let _ = to_model.send(batch);
-        });
+        let totals = sequence_edited(
+            input,
+            machine,
+            BATCH,
+            edit,
+            on_diag,
+            |batch| {
+                let _ = to_model.send(batch);
+            },
+            || spares.try_recv().ok(),
+        );
         drop(to_model);
         if let Err(panic) = model.join() {
             std::panic::resume_unwind(panic);
@@ -141,10 +152,13 @@ pub fn sequence<R: Read>(
         &mut pass_on,
         on_diag,
         on_batch,
+        || None,
     )
 }
 
-/// [`sequence`], the events edited on their way to the firmware (see [`run_edited`]).
+/// [`sequence`], the events edited on their way to the firmware (see [`run_edited`]), each
+/// batch built in an emptied one that `spare` gives back when it has one (the memory of a
+/// run then stays that of a few batches).
 fn sequence_edited<R: Read>(
     input: R,
     machine: &Machine,
@@ -152,6 +166,7 @@ fn sequence_edited<R: Read>(
     edit: &mut EventEdit,
     mut on_diag: impl FnMut(Diagnostic),
     mut on_batch: impl FnMut(Batch),
+    mut spare: impl FnMut() -> Option<Batch>,
 ) -> io::Result<RunTotals> {
     let geometry = MoveChecker::new(machine, ());
     let mut sequencer = Sequencer::new(machine, &geometry);
@@ -172,6 +187,9 @@ fn sequence_edited<R: Read>(
                     sequencer.commanded(c);
                 }
                 if sequencer.pending_pieces() >= batch_pieces {
+                    if let Some(b) = spare() {
+                        sequencer.recycle(b);
+                    }
                     on_batch(sequencer.take_batch(false));
                 }
             })
