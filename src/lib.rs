@@ -19,3 +19,4 @@ pub mod path;
 pub mod plot;
 pub mod report;
 pub mod resample;
+pub mod tune;

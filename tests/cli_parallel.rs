@@ -42,3 +42,34 @@ fn reports_and_traces_do_not_depend_on_the_thread_count() {
     assert!(one.len() > 1_000_000, "{} bytes", one.len());
     assert_eq!(one, run_with_threads("4", &trace));
 }
+
+#[test]
+fn a_shaped_check_does_not_depend_on_the_thread_count() {
+    // With an input shaper the sequential stage is the larger one (docs/performance.md);
+    // the batches it hands on, recycled between the stages, carry the same pieces.
+    let dir = tempfile::tempdir().expect("temp dir");
+    let profile = dir.path().join("kossel-shaper.yaml");
+    let base = std::fs::read_to_string(repo("machines/kossel.yaml")).expect("profile");
+    std::fs::write(
+        &profile,
+        base + "\ninput_shaper:\n  shaper_type: mzv\n  shaper_freq_x: 40\n  shaper_freq_y: 36\n",
+    )
+    .expect("write profile");
+    let cube = repo("samples/calib-cube_cura413_kossel-mini.gcode")
+        .display()
+        .to_string();
+    let profile = profile.display().to_string();
+    let check = [
+        "check",
+        &cube,
+        "-m",
+        &profile,
+        "--format",
+        "json",
+        "--all-moves",
+        "-q",
+    ];
+    let one = run_with_threads("1", &check);
+    assert!(one.len() > 100_000, "{} bytes", one.len());
+    assert_eq!(one, run_with_threads("3", &check));
+}

@@ -70,10 +70,35 @@ pub fn run<R: Read, O: Observer>(
     input: R,
     machine: &Machine,
     observer: O,
+    on_move: impl FnMut(MoveResult<O::PerMove>) + Send,
+    on_diag: impl FnMut(Diagnostic),
+) -> io::Result<RunTotals> {
+    run_edited(input, machine, observer, &mut pass_on, on_move, on_diag)
+}
+
+/// An edit of the interpreter's events on their way to the firmware: takes one event, hands
+/// on (to its second argument) the events the firmware is to see instead.
+pub type EventEdit<'e> = dyn FnMut(Event, &mut dyn FnMut(Event)) + 'e;
+
+/// Hands an event on unchanged: the edit of a plain run.
+fn pass_on(event: Event, to_firmware: &mut dyn FnMut(Event)) {
+    to_firmware(event);
+}
+
+/// [`run`], with the interpreter's events going through `edit` on their way to the firmware:
+/// it hands on (to its second argument) the events the firmware is to see instead, e.g.
+/// limit changes added before a move (`tune`).
+pub fn run_edited<R: Read, O: Observer>(
+    input: R,
+    machine: &Machine,
+    observer: O,
+    edit: &mut EventEdit,
     mut on_move: impl FnMut(MoveResult<O::PerMove>) + Send,
     on_diag: impl FnMut(Diagnostic),
 ) -> io::Result<RunTotals> {
     let (to_model, batches) = mpsc::sync_channel::<Batch>(BATCHES_IN_FLIGHT);
+    // The batches done with go back to be filled again.
+    let (give_back, spares) = mpsc::channel::<Batch>();
     std::thread::scope(|scope| {
         let model = scope.spawn(move || {
             let mut stage = ModelStage {
@@ -82,6 +107,7 @@ pub fn run<R: Read, O: Observer>(
             };
             for batch in batches {
                 stage.process(&batch, &mut on_move);
+                let _ = give_back.send(batch);
             }
             if let Some(last) = stage.pending.take() {
                 on_move(last);
@@ -89,9 +115,17 @@ pub fn run<R: Read, O: Observer>(
         });
         // A send fails only when the model stage has stopped, and then its panic is
         // re-raised by the join below.
-        let totals = sequence(input, machine, BATCH, on_diag, |batch| {
-            let _ = to_model.send(batch);
-        });
+        let totals = sequence_edited(
+            input,
+            machine,
+            BATCH,
+            edit,
+            on_diag,
+            |batch| {
+                let _ = to_model.send(batch);
+            },
+            || spares.try_recv().ok(),
+        );
         drop(to_model);
         if let Err(panic) = model.join() {
             std::panic::resume_unwind(panic);
@@ -108,8 +142,31 @@ pub fn sequence<R: Read>(
     input: R,
     machine: &Machine,
     batch_pieces: usize,
+    on_diag: impl FnMut(Diagnostic),
+    on_batch: impl FnMut(Batch),
+) -> io::Result<RunTotals> {
+    sequence_edited(
+        input,
+        machine,
+        batch_pieces,
+        &mut pass_on,
+        on_diag,
+        on_batch,
+        || None,
+    )
+}
+
+/// [`sequence`], the events edited on their way to the firmware (see [`run_edited`]), each
+/// batch built in an emptied one that `spare` gives back when it has one (the memory of a
+/// run then stays that of a few batches).
+fn sequence_edited<R: Read>(
+    input: R,
+    machine: &Machine,
+    batch_pieces: usize,
+    edit: &mut EventEdit,
     mut on_diag: impl FnMut(Diagnostic),
     mut on_batch: impl FnMut(Batch),
+    mut spare: impl FnMut() -> Option<Batch>,
 ) -> io::Result<RunTotals> {
     let geometry = MoveChecker::new(machine, ());
     let mut sequencer = Sequencer::new(machine, &geometry);
@@ -121,16 +178,21 @@ pub fn sequence<R: Read>(
         home,
         machine.dialect(),
         |event: Event| {
-            if let Event::Move(m) = &event {
-                sequencer.check(m);
-            }
-            firmware.push(&event, &mut commanded);
-            for c in commanded.drain(..) {
-                sequencer.commanded(c);
-            }
-            if sequencer.pending_pieces() >= batch_pieces {
-                on_batch(sequencer.take_batch(false));
-            }
+            edit(event, &mut |event| {
+                if let Event::Move(m) = &event {
+                    sequencer.check(m);
+                }
+                firmware.push(&event, &mut commanded);
+                for c in commanded.drain(..) {
+                    sequencer.commanded(c);
+                }
+                if sequencer.pending_pieces() >= batch_pieces {
+                    if let Some(b) = spare() {
+                        sequencer.recycle(b);
+                    }
+                    on_batch(sequencer.take_batch(false));
+                }
+            })
         },
         |d| {
             if for_firmware(&machine.firmware, &d) {

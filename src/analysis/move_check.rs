@@ -37,7 +37,7 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
             model: machine.model(),
             response: match &machine.drive {
                 Drive::Rigid => None,
-                Drive::Spring(s) => Some(Response::new(s)),
+                Drive::Spring(s) => Some(Response::new(s).with_step(machine.sampling.period_s)),
             },
             observer,
         }
@@ -137,6 +137,10 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
         }
         self.model
             .forces_block(&scratch.states, n, &mut scratch.forces);
+        let verdict = Verdict {
+            motors: &self.machine.motors,
+        };
+        verdict.available(&scratch.forces, n, &mut scratch.available_n);
         let mut j0 = 0;
         while j0 < n {
             let slot = scratch.slot[j0];
@@ -154,10 +158,8 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
                 states: &scratch.states,
                 cmd_pos_mm: &scratch.cmd_pos_mm,
                 forces: &scratch.forces,
+                available_n: &scratch.available_n,
                 lanes: j0..j1,
-            };
-            let verdict = Verdict {
-                motors: &self.machine.motors,
             };
             verdict.observe(&self.model, &mut r.stats, &run);
             self.observer.observe(&self.model, &mut r.observed, &run);
@@ -194,6 +196,7 @@ pub struct Scratch {
     states: StateBlock,
     cmd_pos_mm: [[f64; BLOCK]; 3],
     forces: ForceBlock,
+    available_n: [[f64; BLOCK]; 3],
 }
 
 impl Default for Scratch {
@@ -206,6 +209,7 @@ impl Default for Scratch {
             states: StateBlock::default(),
             cmd_pos_mm: [[0.0; BLOCK]; 3],
             forces: ForceBlock::default(),
+            available_n: [[0.0; BLOCK]; 3],
         }
     }
 }

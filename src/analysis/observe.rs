@@ -20,6 +20,9 @@ pub struct Evaluated<'a> {
     /// The commanded positions, mm (one array per coordinate).
     pub cmd_pos_mm: &'a [[f64; crate::delta::BLOCK]; 3],
     pub forces: &'a ForceBlock,
+    /// The force each motor can give at its carriage's speed (the torque-speed curve), N,
+    /// per tower (see [`Verdict::available`]).
+    pub available_n: &'a [[f64; BLOCK]; 3],
     /// The run's lanes in the block (and in `t_s`, `phase`).
     pub lanes: Range<usize>,
 }
@@ -150,6 +153,18 @@ pub struct Verdict<'m> {
     pub motors: &'m Motors,
 }
 
+impl Verdict<'_> {
+    /// The force each motor can give at the carriage speeds of the first `len` lanes of
+    /// `forces`, N: computed once per block for every observer of its runs.
+    pub fn available(&self, forces: &ForceBlock, len: usize, out: &mut [[f64; BLOCK]; 3]) {
+        for (avail, dq) in out.iter_mut().zip(&forces.dq_mm_s) {
+            for (a, v) in avail[..len].iter_mut().zip(&dq[..len]) {
+                *a = self.motors.available_force_n(v.abs());
+            }
+        }
+    }
+}
+
 impl Observer for Verdict<'_> {
     type PerMove = MoveStats;
 
@@ -159,13 +174,7 @@ impl Observer for Verdict<'_> {
 
     #[inline(always)]
     fn observe(&self, model: &DeltaModel, stats: &mut MoveStats, run: &Evaluated) {
-        let (lanes, fo) = (run.lanes.clone(), run.forces);
-        let mut available = [[0.0; BLOCK]; 3];
-        for (avail, dq) in available.iter_mut().zip(&fo.dq_mm_s) {
-            for j in lanes.clone() {
-                avail[j] = self.motors.available_force_n(dq[j].abs());
-            }
-        }
+        let (lanes, fo, available) = (run.lanes.clone(), run.forces, run.available_n);
         let forces = |j0: usize, j1: usize| RunForces {
             t_s: &run.t_s[j0..j1],
             phase: &run.phase[j0..j1],

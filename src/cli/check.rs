@@ -33,6 +33,9 @@ pub struct Args {
     /// No progress bar
     #[arg(long, short)]
     pub quiet: bool,
+    /// No recommendation of limits that pass (it re-plans a failing file a few times)
+    #[arg(long)]
+    pub no_recommendation: bool,
     #[command(flatten)]
     pub verbose: VerboseArg,
     /// Write SVG plots into DIR: each file's tower forces around its worst moment
@@ -52,13 +55,19 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let inputs: Vec<anyhow::Result<Input>> = args.files.iter().map(|f| Input::open(f)).collect();
     let results = for_each_file_in_parallel(&inputs, |input| {
         let input = input.as_ref().map_err(|e| anyhow::anyhow!("{e:#}"))?;
-        let report = check_with_progress(
+        let mut report = check_with_progress(
             input,
             &machine,
             args.all_moves,
             &progress,
             args.verbose.verbose,
         )?;
+        if report.failed() && report.summary.errors == 0 && !args.no_recommendation {
+            match delta_gcode::tune::recommend(&input.path, &machine) {
+                Ok(r) => report.recommendation = Some(r),
+                Err(e) => report.recommendation_error = Some(format!("{e:#}")),
+            }
+        }
         if let Some(dir) = &args.plot {
             super::check_plots::write_plots(input, &machine, &report, dir)
                 .with_context(|| format!("plotting {}", input.name))?;

@@ -49,6 +49,24 @@ impl MachineArg {
     }
 }
 
+/// Where a command that rewrites a G-code file writes it: `-o OUT` or `--in-place`.
+#[derive(clap::Args, Debug)]
+pub struct RewriteArgs {
+    /// Write the new G-code here
+    #[arg(long, short, value_name = "OUT", required_unless_present = "in_place")]
+    pub output: Option<PathBuf>,
+    /// Replace FILE by its new version (whole or not at all)
+    #[arg(long, conflicts_with = "output")]
+    pub in_place: bool,
+}
+
+impl RewriteArgs {
+    /// The file to write: OUT, or `file` itself.
+    pub fn target<'a>(&'a self, file: &'a Path) -> &'a Path {
+        self.output.as_deref().unwrap_or(file)
+    }
+}
+
 /// Progress bars on stderr, one per large file, only when stderr is a terminal.
 pub struct Progress {
     multi: Option<MultiProgress>,

@@ -31,7 +31,9 @@ pub struct Args {
     /// Output format
     #[arg(long, default_value = "text", value_parser = text_or_json())]
     pub format: Format,
-    /// Write the motor's force against carriage speed as SVG into DIR (STEM-motor.svg)
+    /// Write the motor's force against carriage speed as SVG into DIR (STEM-motor.svg), and
+    /// maps of the largest acceleration over the print disc at rest and at a print speed
+    /// (STEM-accel-rest.svg, STEM-accel-speed.svg)
     #[arg(long, value_name = "DIR")]
     pub plot: Option<PathBuf>,
 }
@@ -95,6 +97,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
                 },
                 "drive": drive_json(&machine),
                 "motor": motor_json(&machine),
+                "max_accel_map": super::machine_accel::json(&machine),
             });
             put!("{v}");
         }
@@ -162,6 +165,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
                 machine.gravity_m_s2
             );
             print_additions(&machine);
+            super::machine_accel::print_text(&machine);
         }
     }
     if let Some(dir) = &args.plot {
@@ -171,6 +175,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
         let path = dir.join(format!("{stem}-motor.svg"));
         std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
         plot_motor(&machine, &path)?;
+        super::machine_accel::plot(&machine, dir, &stem)?;
     }
     Ok(ExitCode::SUCCESS)
 }

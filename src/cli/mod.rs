@@ -4,13 +4,16 @@ mod annotate;
 mod check;
 mod check_plots;
 mod common;
+mod fix;
 mod import_klipper;
 mod input;
 mod machine;
+mod machine_accel;
 mod out;
 mod plot;
 mod pose;
 mod replace;
+mod strip;
 mod trace;
 
 use std::process::ExitCode;
@@ -33,6 +36,11 @@ pub enum Command {
     Check(check::Args),
     /// Write the analysis into the G-code (for slicer post-processing hooks).
     Annotate(annotate::Args),
+    /// Add the firmware's limit commands around the moves that need them, so that every
+    /// move passes.
+    Fix(fix::Args),
+    /// Remove the lines `annotate` and `fix` added.
+    Strip(strip::Args),
     /// One CSV row per sample: nozzle and carriage motion, forces, power.
     Trace(trace::Args),
     /// The model at one nozzle state: carriages, their velocities and accelerations, forces.
@@ -61,6 +69,8 @@ pub fn main() -> ExitCode {
     let result = match &cli.command {
         Command::Check(args) => check::run(args),
         Command::Annotate(args) => annotate::run(args),
+        Command::Fix(args) => fix::run(args),
+        Command::Strip(args) => strip::run(args),
         Command::Trace(args) => trace::run(args),
         Command::Pose(args) => pose::run(args),
         Command::Machine(args) => machine::run(args),

@@ -1,15 +1,19 @@
-//! The emitter: input lines byte-for-byte, with `; delta-gcode` annotation lines added.
+//! The emitter: input lines byte-for-byte, with our lines added: `; delta-gcode` notes
+//! (`annotate`) and limit commands ending in `; delta-gcode` (`fix`).
 //!
 //! Guarantees:
-//! - Every input line that does not start with [`PREFIX`] is written byte-for-byte, in
-//!   order, streamed piece by piece (a line of any length is never held whole).
-//! - Lines starting with [`PREFIX`] (ours, from an earlier run) are dropped, so annotating
-//!   twice equals annotating once, and [`strip`] of the output gives the input back.
-//! - After input line N come the strings of `annotations[N]`, each as its own line ended
-//!   with line N's terminator; then the `summary` lines, ended with the last line's
-//!   terminator. Line numbers are those of the input as read (old annotation lines count),
-//!   the numbering of [`crate::gcode::interpret`]; numbers of dropped or missing lines are
-//!   ignored.
+//! - Every input line that is not ours (see [`is_ours`] and [`Drop`]) is written
+//!   byte-for-byte, in order, streamed piece by piece (a line of any length is never held
+//!   whole).
+//! - Our lines from an earlier run are dropped, so annotating (or fixing) twice equals
+//!   doing it once, and [`strip`] of the output gives the input back. `annotate` drops only
+//!   the notes (lines starting with [`PREFIX`]) and keeps `fix`'s commands as input;
+//!   `fix` and `strip` drop both.
+//! - Before input line N come the strings of `before[N]`, after it those of `after[N]`, each
+//!   as its own line ended with the terminator of the line before it (line N's own for
+//!   `after`); then the `summary` lines, ended with the last line's terminator. Line
+//!   numbers are those of the input as read (old lines of ours count), the numbering of
+//!   [`crate::gcode::interpret`]; numbers of dropped or missing lines are ignored.
 //! - An input whose last line has no terminator: our lines still follow it, so that line
 //!   gets the terminator of the other lines (the first one found; LF when there is none) and the output ends with the
 //!   marker line [`NO_FINAL_NEWLINE`]. Dropping our lines then also drops the terminator
@@ -28,6 +32,33 @@ pub const PREFIX: &[u8] = b"; delta-gcode";
 pub const NO_FINAL_NEWLINE: &str =
     "; delta-gcode: the input ended without a newline after the line above this block";
 
+/// Which of our lines in the input are dropped (and which the added lines may be).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Drop {
+    /// The notes, lines starting with [`PREFIX`] (`annotate`: `fix`'s commands are input to
+    /// it).
+    Notes,
+    /// The notes and the commands `fix` added, lines ending with [`PREFIX`] (`fix`, `strip`).
+    All,
+}
+
+/// Whether a line is ours, from its first piece (`whole`: that piece is the whole line; our
+/// commands are always short enough to be).
+pub fn is_ours(first_piece: &[u8], whole: bool, drop: Drop) -> bool {
+    first_piece.starts_with(PREFIX)
+        || (drop == Drop::All
+            && whole
+            && strip_term(first_piece).trim_ascii_end().ends_with(PREFIX))
+}
+
+/// The lines to add to an input (see the module documentation).
+#[derive(Clone, Debug, Default)]
+pub struct Additions {
+    pub before: BTreeMap<u64, Vec<String>>,
+    pub after: BTreeMap<u64, Vec<String>>,
+    pub summary: Vec<String>,
+}
+
 /// Writes `input` to `output` with annotations after their lines and the summary at the
 /// end (see the module documentation). Every string must start with `; delta-gcode` and
 /// hold no line break; otherwise nothing is written and the error is `InvalidInput`.
@@ -37,11 +68,31 @@ pub fn emit<R: Read, W: Write>(
     annotations: &BTreeMap<u64, Vec<String>>,
     summary: &[String],
 ) -> io::Result<()> {
-    for s in annotations.values().flatten().chain(summary) {
-        if !s.as_bytes().starts_with(PREFIX) || s.contains(['\n', '\r']) {
+    let add = Additions {
+        before: BTreeMap::new(),
+        after: annotations.clone(),
+        summary: summary.to_vec(),
+    };
+    emit_with(input, output, &add, Drop::Notes)
+}
+
+/// Writes `input` to `output` without our lines of `drop`, with the lines of `add` (see
+/// the module documentation). Every added string must be one line that `drop` would drop;
+/// otherwise nothing is written and the error is `InvalidInput`.
+pub fn emit_with<R: Read, W: Write>(
+    input: R,
+    output: W,
+    add: &Additions,
+    drop: Drop,
+) -> io::Result<()> {
+    let annotations = &add.after;
+    let summary = &add.summary[..];
+    let all = add.before.values().chain(annotations.values()).flatten();
+    for s in all.chain(summary) {
+        if !is_ours(s.as_bytes(), true, drop) || s.contains(['\n', '\r']) {
             return Err(io::Error::new(
                 ErrorKind::InvalidInput,
-                format!("annotation must start with `; delta-gcode` and be one line: {s:?}"),
+                format!("an added line must be ours (`; delta-gcode`) and one line: {s:?}"),
             ));
         }
     }
@@ -57,15 +108,27 @@ pub fn emit<R: Read, W: Write>(
     let mut marker_last: Option<&'static [u8]> = None;
 
     while let Some(c) = chunks.next_chunk()? {
+        let term = terminator(c.bytes, c.last);
         if c.first {
-            dropping = c.bytes.starts_with(PREFIX);
+            dropping = is_ours(c.bytes, c.last, drop);
             marker_last = None;
-            if !dropping && let Some((_, term)) = pending {
-                default_term = default_term.or(Some(term));
-                flush_pending(&mut out, &mut pending, annotations)?;
+            if !dropping {
+                let before_term = match pending {
+                    Some((_, t)) => t,
+                    None if !term.is_empty() => term,
+                    None => b"\n",
+                };
+                if let Some((_, t)) = pending {
+                    default_term = default_term.or(Some(t));
+                    flush_pending(&mut out, &mut pending, annotations)?;
+                }
+                write_lines(
+                    &mut out,
+                    add.before.get(&c.line).into_iter().flatten(),
+                    before_term,
+                )?;
             }
         }
-        let term = terminator(c.bytes, c.last);
         if dropping {
             if c.last && c.first && strip_term(c.bytes) == NO_FINAL_NEWLINE.as_bytes() {
                 marker_last = Some(term);
@@ -109,9 +172,54 @@ pub fn emit<R: Read, W: Write>(
     out.flush()
 }
 
-/// Drops the lines an earlier run added: `strip(emit(x)) == x`.
+/// Drops the lines an earlier run of `annotate` or `fix` added: `strip(emit(x)) == x`.
 pub fn strip<R: Read, W: Write>(input: R, output: W) -> io::Result<()> {
-    emit(input, output, &BTreeMap::new(), &[])
+    emit_with(input, output, &Additions::default(), Drop::All)
+}
+
+/// The input with our lines (of `fix` and `annotate`) made empty: what `fix` plans, the
+/// same motion as the input had before any run of ours, with the same line numbers.
+pub struct WithoutOurs<R> {
+    chunks: ChunkReader<R>,
+    /// Bytes of the current piece not yet read.
+    out: Vec<u8>,
+    pos: usize,
+    dropping: bool,
+}
+
+impl<R: Read> WithoutOurs<R> {
+    pub fn new(input: R) -> Self {
+        WithoutOurs {
+            chunks: ChunkReader::new(input),
+            out: Vec::new(),
+            pos: 0,
+            dropping: false,
+        }
+    }
+}
+
+impl<R: Read> Read for WithoutOurs<R> {
+    fn read(&mut self, buf: &mut [u8]) -> io::Result<usize> {
+        while self.pos == self.out.len() {
+            self.out.clear();
+            self.pos = 0;
+            let Some(c) = self.chunks.next_chunk()? else {
+                return Ok(0);
+            };
+            if c.first {
+                self.dropping = is_ours(c.bytes, c.last, Drop::All);
+            }
+            if self.dropping {
+                self.out.extend_from_slice(terminator(c.bytes, c.last));
+            } else {
+                self.out.extend_from_slice(c.bytes);
+            }
+        }
+        let n = buf.len().min(self.out.len() - self.pos);
+        buf[..n].copy_from_slice(&self.out[self.pos..self.pos + n]);
+        self.pos += n;
+        Ok(n)
+    }
 }
 
 /// Writes the held terminator of the previous kept line and its annotations.
@@ -271,6 +379,41 @@ mod tests {
         )
         .unwrap_err();
         assert_eq!(e.kind(), ErrorKind::InvalidInput);
+    }
+
+    #[test]
+    fn fix_commands_go_before_their_line_and_strip_away() {
+        let input = b"G1 X1\r\n; delta-gcode: note\r\nSET_VELOCITY_LIMIT ACCEL=1 ; delta-gcode\r\nG1 X2\r\nG1 X3";
+        let mut add = Additions::default();
+        add.before
+            .insert(1, vec!["SET_VELOCITY_LIMIT ACCEL=9 ; delta-gcode".into()]);
+        add.before
+            .insert(4, vec!["SET_VELOCITY_LIMIT ACCEL=2 ; delta-gcode".into()]);
+        add.after.insert(4, vec!["; delta-gcode: after".into()]);
+        let mut out = Vec::new();
+        emit_with(&input[..], &mut out, &add, Drop::All).unwrap();
+        let want = "SET_VELOCITY_LIMIT ACCEL=9 ; delta-gcode\r\nG1 X1\r\nSET_VELOCITY_LIMIT ACCEL=2 ; delta-gcode\r\nG1 X2\r\n; delta-gcode: after\r\nG1 X3";
+        assert_eq!(String::from_utf8_lossy(&out), want);
+        assert_eq!(stripped(&out), b"G1 X1\r\nG1 X2\r\nG1 X3");
+        // `annotate` keeps the commands (they are its input), drops only the notes.
+        assert_eq!(
+            run(input, &[], &[]),
+            b"G1 X1\r\nSET_VELOCITY_LIMIT ACCEL=1 ; delta-gcode\r\nG1 X2\r\nG1 X3"
+        );
+        // A note may not be added before a line with `Drop::Notes`, nor a command.
+        let e = emit(
+            &input[..],
+            Vec::new(),
+            &BTreeMap::from([(1, vec!["M204 S1 ; delta-gcode".into()])]),
+            &[],
+        );
+        assert_eq!(e.unwrap_err().kind(), ErrorKind::InvalidInput);
+        // Planned without our lines, with the same line numbers.
+        let mut blanked = Vec::new();
+        WithoutOurs::new(&input[..])
+            .read_to_end(&mut blanked)
+            .unwrap();
+        assert_eq!(blanked, b"G1 X1\r\n\r\n\r\nG1 X2\r\nG1 X3");
     }
 
     #[test]

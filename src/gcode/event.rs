@@ -85,6 +85,24 @@ pub struct LimitChange {
     pub accel_to_decel_mm_s2: Option<f64>,
 }
 
+impl LimitChange {
+    /// The values Klipper accepts (toolhead.py `cmd_SET_VELOCITY_LIMIT`): velocity, accel
+    /// and ACCEL_TO_DECEL finite and above 0, scv finite and at least 0, the cruise ratio
+    /// in [0, 1); the others left out (the G-code stage reports them).
+    pub fn accepted(&self) -> LimitChange {
+        let positive = |v: Option<f64>| v.filter(|x| x.is_finite() && *x > 0.0);
+        LimitChange {
+            velocity_mm_s: positive(self.velocity_mm_s),
+            accel_mm_s2: positive(self.accel_mm_s2),
+            square_corner_velocity_mm_s: self
+                .square_corner_velocity_mm_s
+                .filter(|x| x.is_finite() && *x >= 0.0),
+            minimum_cruise_ratio: self.minimum_cruise_ratio.filter(|x| (0.0..1.0).contains(x)),
+            accel_to_decel_mm_s2: positive(self.accel_to_decel_mm_s2),
+        }
+    }
+}
+
 /// What one G-code line asks of the machine, in the order the lines stand.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Event {

@@ -372,16 +372,23 @@ impl Shaper {
     /// by planned move too.
     fn next_break(&self, t: f64) -> f64 {
         let mut best = f64::INFINITY;
-        let offsets = self.axes.iter().flat_map(Pulses::iter).map(|(_, tau)| tau);
+        // Y's offsets are X's when both axes have the same shaper.
+        let axes = if self.axes[0] == self.axes[1] {
+            &self.axes[..1]
+        } else {
+            &self.axes[..]
+        };
+        let offsets = axes.iter().flat_map(Pulses::iter).map(|(_, tau)| tau);
         for tau in offsets.chain(std::iter::once(0.0)) {
             // Breaks of the planned motion after t + τ: the pieces' starts and the end.
-            let want = t + tau;
-            let found = self
-                .planned
-                .iter()
-                .map(|s| s.t0_s)
-                .chain(self.planned.back().map(Segment::t1_s))
-                .find(|&b| b > want + 1e-12);
+            // The planned pieces are in time order: the first start after `want` by
+            // bisection, else the last piece's end.
+            let want = t + tau + 1e-12;
+            let i = self.planned.partition_point(|s| s.t0_s <= want);
+            let found = match self.planned.get(i) {
+                Some(s) => Some(s.t0_s),
+                None => self.planned.back().map(Segment::t1_s).filter(|&b| b > want),
+            };
             if let Some(b) = found {
                 best = best.min(b - tau);
             }
@@ -395,21 +402,30 @@ impl Shaper {
         let own = self.planned_at(mid);
         let (p0, v0, a0) = self.planned_state(own, ta);
         let (mut p, mut v, mut a) = (p0, v0, a0);
+        // Both axes in one pass over the pulses when they have the same shaper (the same
+        // sums, in the same order, as one axis at a time).
+        let same = self.axes[0] == self.axes[1];
         for (axis, pulses) in self.axes.iter().enumerate() {
-            if *pulses == Pulses::IDENTITY {
+            if *pulses == Pulses::IDENTITY || (same && axis == 1) {
                 continue;
             }
-            let (mut pk, mut vk, mut ak) = (0.0, 0.0, 0.0);
+            let (mut pk, mut vk, mut ak) = ([0.0; 2], [0.0; 2], [0.0; 2]);
             for (w, tau) in pulses.iter() {
                 let s = self.planned_at(mid + tau);
                 let (ps, vs, as_) = self.planned_state(s, ta + tau);
-                pk += w * ps[axis];
-                vk += w * vs[axis];
-                ak += w * as_[axis];
+                for k in 0..2 {
+                    pk[k] += w * ps[k];
+                    vk[k] += w * vs[k];
+                    ak[k] += w * as_[k];
+                }
             }
-            p[axis] = pk;
-            v[axis] = vk;
-            a[axis] = ak;
+            for k in 0..2 {
+                if k == axis || same {
+                    p[k] = pk[k];
+                    v[k] = vk[k];
+                    a[k] = ak[k];
+                }
+            }
         }
         let (line, phase) = match own {
             Some(s) => (s.line, s.phase),

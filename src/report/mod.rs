@@ -45,6 +45,21 @@ pub struct Report {
     pub notes: Vec<String>,
     #[serde(skip)]
     footprint: footprint::Footprint,
+    /// A failing file: the limits under which it passes (verified by re-planning).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub recommendation: Option<Recommendation>,
+    /// A failing file with no recommendation: why none (a move no limit helps).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub recommendation_error: Option<String>,
+}
+
+/// Limits under which a file passes, and its print time with them (`tune`).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Recommendation {
+    pub max_accel_mm_s2: f64,
+    pub square_corner_velocity_mm_s: f64,
+    pub max_velocity_mm_s: f64,
+    pub print_time_s: f64,
 }
 
 #[derive(Clone, Debug, Default, Serialize)]
@@ -167,6 +182,8 @@ impl Report {
             diagnostic_kinds: DiagnosticKinds::default(),
             notes: Vec::new(),
             footprint: footprint::Footprint::default(),
+            recommendation: None,
+            recommendation_error: None,
         }
     }
 

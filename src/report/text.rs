@@ -115,6 +115,40 @@ pub fn write_text(out: &mut (impl Write + ?Sized), report: &Report) -> io::Resul
             s.warnings, s.errors
         )?;
     }
+    write_recommendation(out, report)
+}
+
+/// What to change: the limits under which the file passes, or why there are none.
+fn write_recommendation(out: &mut (impl Write + ?Sized), report: &Report) -> io::Result<()> {
+    if let Some(r) = &report.recommendation {
+        let base = report.summary.print_time_s;
+        let slower = if base > 0.0 {
+            format!(", {:+.1} %", 100.0 * (r.print_time_s - base) / base)
+        } else {
+            String::new()
+        };
+        writeln!(out)?;
+        writeln!(
+            out,
+            "  passes with   ACCEL={} SQUARE_CORNER_VELOCITY={} VELOCITY={} (mm/s², mm/s, mm/s): print time {} ({:.1} s{slower})",
+            r.max_accel_mm_s2,
+            r.square_corner_velocity_mm_s,
+            r.max_velocity_mm_s,
+            clock(r.print_time_s),
+            r.print_time_s
+        )?;
+        writeln!(
+            out,
+            "                at most: lower printer.cfg's max_accel, square_corner_velocity, max_velocity where they are higher, and cap the file's own M204 / SET_VELOCITY_LIMIT;"
+        )?;
+        writeln!(
+            out,
+            "                or `delta-gcode fix` slows only the moves that need it"
+        )?;
+    } else if let Some(why) = &report.recommendation_error {
+        writeln!(out)?;
+        writeln!(out, "  no limits pass: {why}")?;
+    }
     Ok(())
 }
 
@@ -147,6 +181,33 @@ mod tests {
         assert!(text.contains("print time    0:00:04 (3.5 s)"), "{text}");
         assert!(
             text.contains("motor use     at most 104% of the force a motor can give at its speed (tower A, line 20)"),
+            "{text}"
+        );
+    }
+
+    #[test]
+    fn recommendation_with_its_cost() {
+        let mut r = sample_report();
+        r.recommendation = Some(crate::report::Recommendation {
+            max_accel_mm_s2: 2180.0,
+            square_corner_velocity_mm_s: 5.0,
+            max_velocity_mm_s: 250.0,
+            print_time_s: 3.85,
+        });
+        let mut buf = Vec::new();
+        write_text(&mut buf, &r).unwrap();
+        let text = String::from_utf8(buf).unwrap();
+        assert!(
+            text.contains("passes with   ACCEL=2180 SQUARE_CORNER_VELOCITY=5 VELOCITY=250 (mm/s², mm/s, mm/s): print time 0:00:04 (3.9 s, +10.0 %)"),
+            "{text}"
+        );
+        r.recommendation = None;
+        r.recommendation_error = Some("line 30 cannot be made to pass".into());
+        let mut buf = Vec::new();
+        write_text(&mut buf, &r).unwrap();
+        let text = String::from_utf8(buf).unwrap();
+        assert!(
+            text.contains("  no limits pass: line 30 cannot be made to pass"),
             "{text}"
         );
     }

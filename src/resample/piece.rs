@@ -94,12 +94,25 @@ pub fn sample_piece(
     }
     let seg = &work.piece.commanded;
     let (t0, t1) = (seg.t0_s, seg.t1_s());
+    // With a drive, the phase from the corner's end; without, from the impulses.
+    let phase = |t: f64, kick: bool| {
+        if kick || t < work.corner_until_s {
+            Phase::Corner
+        } else {
+            seg.phase
+        }
+    };
     let state = |t: f64, left: bool| -> Sample {
         let tau = t - t0;
         let (p, v, a) = seg.at(tau);
         let (pos, vel, acc, kick) = match response {
             Some(r) => {
-                let lag = r.lag_at(&work.piece.lag, seg.a, tau);
+                // At the start the lag is the piece's own (what `lag_at` gives at τ = 0).
+                let lag = if tau == 0.0 {
+                    work.piece.lag
+                } else {
+                    r.lag_at(&work.piece.lag, seg.a, tau)
+                };
                 (p + lag.e, v + lag.de, r.acceleration(&lag), false)
             }
             None => {
@@ -111,15 +124,10 @@ pub fn sample_piece(
                 (p, v, a + k, k != Vec3::zeros())
             }
         };
-        let phase = if kick || t < work.corner_until_s {
-            Phase::Corner
-        } else {
-            seg.phase
-        };
         Sample {
             t_s: t,
             line: seg.line,
-            phase,
+            phase: phase(t, kick),
             pos_mm: pos,
             vel_mm_s: vel,
             acc_mm_s2: acc,
@@ -131,13 +139,40 @@ pub fn sample_piece(
     if k as f64 * period_s <= t0 {
         k += 1;
     }
-    loop {
-        let t = k as f64 * period_s;
-        if t >= t1 {
-            break;
+    match response {
+        // The grid points by the lag's fixed step (`Response::walk`): no exp or sin/cos per
+        // sample.
+        Some(r) if (k as f64 * period_s) < t1 => {
+            let t = k as f64 * period_s;
+            let mut walk = r.walk(&work.piece.lag, seg.a, t - t0, period_s);
+            loop {
+                let t = k as f64 * period_s;
+                if t >= t1 {
+                    break;
+                }
+                let (p, v, _) = seg.at(t - t0);
+                let lag = walk.lag();
+                out.sample(Sample {
+                    t_s: t,
+                    line: seg.line,
+                    phase: phase(t, false),
+                    pos_mm: p + lag.e,
+                    vel_mm_s: v + lag.de,
+                    acc_mm_s2: r.acceleration(&lag),
+                    cmd_pos_mm: p,
+                });
+                walk.advance();
+                k += 1;
+            }
         }
-        out.sample(state(t, false));
-        k += 1;
+        _ => loop {
+            let t = k as f64 * period_s;
+            if t >= t1 {
+                break;
+            }
+            out.sample(state(t, false));
+            k += 1;
+        },
     }
     if work.end_sample && t1 > t0 {
         out.sample(state(t1, true));
@@ -316,9 +351,11 @@ mod tests {
             let lag = r.lag_at(&piece.lag, a.a, s.t_s);
             let (p, v, _) = a.at(s.t_s);
             assert_eq!(s.cmd_pos_mm, p);
-            assert!((s.pos_mm - (p + lag.e)).norm() < 1e-15);
-            assert!((s.vel_mm_s - (v + lag.de)).norm() < 1e-12);
-            assert_eq!(s.acc_mm_s2, r.acceleration(&lag));
+            // The grid points come from the lag's fixed step: the closed form within
+            // rounding.
+            assert!((s.pos_mm - (p + lag.e)).norm() < 1e-14);
+            assert!((s.vel_mm_s - (v + lag.de)).norm() < 1e-11);
+            assert!((s.acc_mm_s2 - r.acceleration(&lag)).norm() < 1e-9);
             let corner = s.t_s < 0.5 / 45.0;
             assert_eq!(s.phase == Phase::Corner, corner, "{}", s.t_s);
         }

@@ -89,36 +89,20 @@ impl MoveLimits {
         }
     }
 
-    /// Applies an M204 / SET_VELOCITY_LIMIT. Values Klipper would reject (not finite,
-    /// velocity or accel ≤ 0, scv < 0, ratio outside [0, 1)) are ignored: the G-code stage
-    /// reports them.
+    /// Applies an M204 / SET_VELOCITY_LIMIT: the values Klipper accepts
+    /// ([`LimitChange::accepted`]).
     pub(super) fn apply(&mut self, change: &LimitChange) {
         let t = &mut self.toolhead;
-        let positive = |v: Option<f64>| v.filter(|x| x.is_finite() && *x > 0.0);
-        if let Some(v) = positive(change.velocity_mm_s) {
-            t.max_velocity_mm_s = v;
-        }
-        if let Some(a) = positive(change.accel_mm_s2) {
-            t.max_accel_mm_s2 = a;
-        }
-        if let Some(s) = change
+        let c = change.accepted();
+        t.max_velocity_mm_s = c.velocity_mm_s.unwrap_or(t.max_velocity_mm_s);
+        t.max_accel_mm_s2 = c.accel_mm_s2.unwrap_or(t.max_accel_mm_s2);
+        t.square_corner_velocity_mm_s = c
             .square_corner_velocity_mm_s
-            .filter(|x| x.is_finite() && *x >= 0.0)
-        {
-            t.square_corner_velocity_mm_s = s;
-        }
-        if let Some(r) = change
-            .minimum_cruise_ratio
-            .filter(|x| (0.0..1.0).contains(x))
-        {
-            t.minimum_cruise_ratio = r;
-        }
+            .unwrap_or(t.square_corner_velocity_mm_s);
+        t.minimum_cruise_ratio = c.minimum_cruise_ratio.unwrap_or(t.minimum_cruise_ratio);
         // Only the Klipper that reads it: newer ones ignore ACCEL_TO_DECEL.
-        if let (Some(_), Some(a2d)) = (
-            t.accel_to_decel_mm_s2,
-            positive(change.accel_to_decel_mm_s2),
-        ) {
-            t.accel_to_decel_mm_s2 = Some(a2d);
+        if t.accel_to_decel_mm_s2.is_some() && c.accel_to_decel_mm_s2.is_some() {
+            t.accel_to_decel_mm_s2 = c.accel_to_decel_mm_s2;
         }
     }
 
