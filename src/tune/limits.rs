@@ -243,6 +243,7 @@ mod tests {
                 e_mm: 0.0,
                 feed_mm_s: 50.0,
                 offset_mm: Vec3::zeros(),
+                arc: None,
             })
         };
         let limits = |line, accel| Event::Limits {
