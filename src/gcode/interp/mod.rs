@@ -14,44 +14,30 @@
 //! M204 P/R/T, M201, M203, M205 and M665 are Marlin's settings ([`Event::Marlin`]); targets
 //! are clamped by the soft endstops (`apply_motion_limits`: beyond the printable radius x,
 //! y *and z* are scaled), and a target out of reach while unhomed (after M665) or with
-//! soft endstops off (M211 S0) drops the move; arcs are `plan_arc`'s ([`MarlinChords`]),
+//! soft endstops off (M211 S0) drops the move; arcs are `plan_arc`'s ([`super::arc::MarlinChords`], `arcs.rs`),
 //! relative and R-form ones included. Klipper's extended commands are noted once and ignored.
 
-use super::arc::{ArcRules, Chords, MarlinArc, MarlinChords, Plane};
+mod arcs;
+mod klipper_commands;
+mod retract;
+mod soft_endstops;
+
+pub use klipper_commands::M204_P_OR_T_IGNORED;
+pub use retract::Retraction;
+
+use super::arc::Plane;
 use super::dialect::{self, Dialect, FirmwareKind};
-use super::parse::{Command, ParsedLine, param_f64, parse_line};
+use super::parse::{Command, ParsedLine, parse_line};
 use super::reader::BUFFER_BYTES;
 use super::{ArcChord, Diagnostic, Event, LimitChange, MarlinChange, Move, Severity, marlin};
-use crate::motion::shaper::{ShaperChange, ShaperType};
 use crate::path::{Path, Vec3};
+use klipper_commands::{m204, set_input_shaper, set_velocity_limit};
 
 /// Feed before the first F, mm/min (Klipper's default speed, 25 mm/s).
 pub const DEFAULT_FEED_MM_MIN: f64 = 1500.0;
 
 /// Marlin's feed before the first F, mm/min (`DEFAULT_FEEDRATE_MM_M`).
 const MARLIN_DEFAULT_FEED_MM_MIN: f64 = crate::machine::defaults::MARLIN_DEFAULT_FEEDRATE_MM_MIN;
-
-/// Firmware retraction (G10/G11). Defaults are Marlin's (`RETRACT_LENGTH` 3 mm at
-/// 45 mm/s, recover 0 mm extra at 8 mm/s), since Klipper's default length is 0;
-/// `SET_RETRACTION` (Klipper) and `M207`/`M208` (Marlin) change them.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Retraction {
-    pub length_mm: f64,
-    pub speed_mm_s: f64,
-    pub unretract_extra_mm: f64,
-    pub unretract_speed_mm_s: f64,
-}
-
-impl Default for Retraction {
-    fn default() -> Self {
-        Retraction {
-            length_mm: 3.0,
-            speed_mm_s: 45.0,
-            unretract_extra_mm: 0.0,
-            unretract_speed_mm_s: 8.0,
-        }
-    }
-}
 
 /// Counts gathered while reading.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -624,213 +610,6 @@ impl Interpreter {
         }
     }
 
-    /// Marlin's `apply_motion_limits` with soft endstops on and the machine homed: beyond
-    /// the printable radius the target's x, y and z are scaled by radius / r (Z too, as
-    /// Marlin does), then z is kept in [0, max z]. A warning when it changes the target.
-    fn apply_motion_limits(&self, t: Vec3, d: &mut Diags<impl FnMut(Diagnostic)>) -> Vec3 {
-        let Some(soft) = self.dialect.soft_endstops else {
-            return t;
-        };
-        if !(self.soft_endstops_on && self.homed) {
-            return t;
-        }
-        let mut c = t;
-        let r2 = t.x * t.x + t.y * t.y;
-        if r2 > soft.radius_mm * soft.radius_mm {
-            c *= soft.radius_mm / r2.sqrt();
-        }
-        c.z = c.z.clamp(0.0, soft.max_z_mm);
-        if c != t {
-            d.warn(
-                1,
-                format!(
-                    "the target ({:.3}, {:.3}, {:.3}) is outside Marlin's soft endstops \
-                     (printable radius {} mm, Z 0 to {} mm): Marlin moves to ({:.3}, {:.3}, \
-                     {:.3}) instead (beyond the radius it scales X, Y and Z alike)",
-                    t.x, t.y, t.z, soft.radius_mm, soft.max_z_mm, c.x, c.y, c.z
-                ),
-            );
-        }
-        c
-    }
-
-    /// Marlin's `position_is_reachable` on a delta: within the printable radius (+0.1 µm).
-    fn reachable(&self, t: Vec3) -> bool {
-        self.dialect
-            .soft_endstops
-            .is_none_or(|s| (t.x * t.x + t.y * t.y) <= (s.radius_mm + 1e-4).powi(2))
-    }
-
-    /// G2/G3 as Marlin's `G2_G3` and `plan_arc` run them: the destination as for G1 (G91
-    /// and M83 allowed), the centre from R (the nearer centre; negative R the farther) or
-    /// from I and J; chords of [`MarlinChords`], each clamped by the soft endstops, each
-    /// with its share of E and the planner's hint; the position ends on the unclamped
-    /// target, as Marlin's does.
-    fn marlin_arc(
-        &mut self,
-        p: &ParsedLine,
-        clockwise: bool,
-        column: u32,
-        ev: &mut Events<impl FnMut(Event)>,
-        d: &mut Diags<impl FnMut(Diagnostic)>,
-    ) {
-        self.feed(p, d);
-        let target = self.target(p, d);
-        let start = self.pos;
-        let mut offset = [0.0, 0.0];
-        if let Some(r) = p.word(b'R').and_then(|w| w.value) {
-            let r = r * self.unit_mm;
-            if r != 0.0 && (start.x != target.x || start.y != target.y) {
-                let d2 = [(target.x - start.x) * 0.5, (target.y - start.y) * 0.5];
-                let e = if clockwise ^ (r < 0.0) { -1.0 } else { 1.0 };
-                let len = d2[0].hypot(d2[1]);
-                let h2 = (r - len) * (r + len);
-                let h = if h2 >= 0.0 { h2.sqrt() } else { 0.0 };
-                offset = [d2[0] - d2[1] / len * e * h, d2[1] + d2[0] / len * e * h];
-            }
-        } else {
-            offset = [
-                p.value(b'I').unwrap_or(0.0) * self.unit_mm,
-                p.value(b'J').unwrap_or(0.0) * self.unit_mm,
-            ];
-        }
-        if offset == [0.0, 0.0] || !(offset[0].is_finite() && offset[1].is_finite()) {
-            d.error(
-                column,
-                "G2/G3: Bad parameters (Marlin refuses the arc: it needs a centre offset I/J or \
-                 a radius R)"
-                    .into(),
-            );
-            return;
-        }
-        if let Some(w) = p.word(b'P') {
-            d.warn(
-                w.column,
-                "P (whole circles) is ignored (Marlin's ARC_P_CIRCLES is off by default)".into(),
-            );
-        }
-        let e_before = self.e_pos;
-        let e_total = self.extrusion(p, d);
-        let feed = self.feed_mm_s();
-        match MarlinChords::plan(
-            start,
-            target,
-            offset,
-            clockwise,
-            &self.dialect.arcs,
-            feed,
-            e_total != 0.0,
-        ) {
-            MarlinArc::Nothing => self.e_pos = e_before,
-            MarlinArc::ExtrudeOnly => {
-                self.stats.arcs += 1;
-                self.send_move(Path::line(start, target), e_total, feed, ev);
-                self.pos = target;
-            }
-            MarlinArc::Chords(chords) => {
-                self.stats.arcs += 1;
-                let n = chords.segments();
-                let (radius, flat) = (chords.radius_mm(), chords.flat_mm());
-                let e_per_chord = e_total / n as f64;
-                for c in chords {
-                    let to = self.apply_motion_limits(c.end, d);
-                    let remaining_mm = if c.index == n {
-                        0.0
-                    } else {
-                        flat - c.index as f64 * (flat / n as f64)
-                    };
-                    let hint = ArcChord {
-                        radius_mm: radius,
-                        remaining_mm,
-                    };
-                    self.send_chord(Path::line(self.pos, to), e_per_chord, feed, Some(hint), ev);
-                    self.pos = to;
-                }
-                self.pos = target;
-            }
-        }
-    }
-
-    /// G2/G3 as Klipper's gcode_arcs.py runs them: refused in relative mode and in R form,
-    /// the centre offset from the plane's two letters (a zero offset refused), cut into
-    /// chords ([`Chords::klipper`]), each an ordinary move with its share of E and the F.
-    fn arc(
-        &mut self,
-        p: &ParsedLine,
-        clockwise: bool,
-        column: u32,
-        ev: &mut Events<impl FnMut(Event)>,
-        d: &mut Diags<impl FnMut(Diagnostic)>,
-    ) {
-        let ArcRules::Klipper { resolution_mm } = self.dialect.arcs else {
-            return;
-        };
-        if !self.absolute {
-            d.error(
-                column,
-                "G2/G3 does not support relative move mode (Klipper refuses it)".into(),
-            );
-            return;
-        }
-        if let Some(r) = p.word(b'R') {
-            d.error(
-                r.column,
-                "G2/G3 does not support R moves (Klipper refuses the radius form; use I/J)".into(),
-            );
-            return;
-        }
-        let [l0, l1] = self.plane.offset_letters();
-        let offset = [
-            p.value(l0).unwrap_or(0.0) * self.unit_mm,
-            p.value(l1).unwrap_or(0.0) * self.unit_mm,
-        ];
-        if offset == [0.0, 0.0] {
-            d.error(
-                column,
-                format!(
-                    "G2/G3 requires a centre offset {}{} (Klipper refuses the arc)",
-                    char::from(l0),
-                    char::from(l1)
-                ),
-            );
-            return;
-        }
-        if let Some(w) = p.word(b'P') {
-            d.warn(w.column, "P (whole turns) is ignored by Klipper".into());
-        }
-        self.feed(p, d);
-        let target = self.target(p, d);
-        // In the G-code's coordinates, as gcode_arcs.py computes (G92 shifts them).
-        let chords = Chords::klipper(
-            self.pos - self.offset,
-            target - self.offset,
-            offset,
-            clockwise,
-            self.plane,
-            resolution_mm,
-        );
-        if chords.chord_count() == 0 {
-            d.error(
-                column,
-                format!(
-                    "arc too long or not finite: more than {} chords of {resolution_mm} mm",
-                    super::arc::MAX_CHORDS
-                ),
-            );
-            return;
-        }
-        let e_total = self.extrusion(p, d);
-        self.stats.arcs += 1;
-        let e_per_chord = e_total / chords.chord_count() as f64;
-        let feed = self.feed_mm_s();
-        for c in chords {
-            let to = c + self.offset;
-            self.send_move(Path::line(self.pos, to), e_per_chord, feed, ev);
-            self.pos = to;
-        }
-        self.pos = target;
-    }
-
     /// G92: the current position gets the given G-code coordinates; without any axis,
     /// all of X, Y, Z, E become 0 (Klipper). Before the first G28 or move nothing says
     /// where the machine is: then the coordinates say where the nozzle is (a calibration
@@ -855,137 +634,6 @@ impl Interpreter {
             self.e_offset = self.e_pos - v;
         }
     }
-
-    /// Marlin's M207 (retract: S length, F feed mm/min) and M208 (recover: S extra
-    /// length, F feed mm/min).
-    fn m207_m208(&mut self, p: &ParsedLine, retract: bool) {
-        let r = &mut self.retraction;
-        let s = p
-            .value(b'S')
-            .filter(|v| *v >= 0.0)
-            .map(|v| v * self.unit_mm);
-        let f = p
-            .value(b'F')
-            .filter(|v| *v > 0.0)
-            .map(|v| v * self.unit_mm / 60.0);
-        if retract {
-            r.length_mm = s.unwrap_or(r.length_mm);
-            r.speed_mm_s = f.unwrap_or(r.speed_mm_s);
-        } else {
-            r.unretract_extra_mm = s.unwrap_or(r.unretract_extra_mm);
-            r.unretract_speed_mm_s = f.unwrap_or(r.unretract_speed_mm_s);
-        }
-    }
-
-    fn set_retraction_params(&mut self, p: &ParsedLine, d: &mut Diags<impl FnMut(Diagnostic)>) {
-        let r = &mut self.retraction;
-        for (key, field, positive) in [
-            ("RETRACT_LENGTH", &mut r.length_mm, false),
-            ("RETRACT_SPEED", &mut r.speed_mm_s, true),
-            ("UNRETRACT_EXTRA_LENGTH", &mut r.unretract_extra_mm, false),
-            ("UNRETRACT_SPEED", &mut r.unretract_speed_mm_s, true),
-        ] {
-            if let Some(q) = p.param(key) {
-                match param_f64(q.value) {
-                    Some(v) if v > 0.0 || (!positive && v == 0.0) => *field = v,
-                    _ => d.error(q.column, format!("{key} must be a non-negative number")),
-                }
-            }
-        }
-    }
-}
-
-/// The warning of an M204 that Klipper ignores; Klipper's alone (Marlin honours P and T,
-/// `analysis::for_firmware`).
-pub const M204_P_OR_T_IGNORED: &str =
-    "M204 with only P or only T is ignored (Klipper needs S, or both P and T)";
-
-/// M204 as Klipper reads it: S sets the acceleration; without S both P and T are needed
-/// and the smaller is used; P or T alone is ignored with a warning.
-fn m204(p: &ParsedLine, column: u32, d: &mut Diags<impl FnMut(Diagnostic)>) -> LimitChange {
-    let positive = |letter: u8, d: &mut Diags<_>| -> Option<Option<f64>> {
-        let w = p.word(letter)?;
-        match w.value {
-            Some(v) if v > 0.0 => Some(Some(v)),
-            _ => {
-                d.error(
-                    w.column,
-                    format!("M204 {} must be positive", char::from(letter)),
-                );
-                Some(None)
-            }
-        }
-    };
-    let accel = match (positive(b'S', d), positive(b'P', d), positive(b'T', d)) {
-        (Some(s), _, _) => s,
-        (None, Some(Some(pv)), Some(Some(t))) => Some(pv.min(t)),
-        (None, Some(_), None) | (None, None, Some(_)) => {
-            d.warn(column, M204_P_OR_T_IGNORED.into());
-            None
-        }
-        _ => None,
-    };
-    LimitChange {
-        accel_mm_s2: accel,
-        ..LimitChange::default()
-    }
-}
-
-/// Klipper's SET_VELOCITY_LIMIT.
-fn set_velocity_limit(p: &ParsedLine, d: &mut Diags<impl FnMut(Diagnostic)>) -> LimitChange {
-    // Klipper's bounds: VELOCITY and ACCEL above 0, SQUARE_CORNER_VELOCITY at least 0,
-    // MINIMUM_CRUISE_RATIO in [0, 1).
-    let mut get = |key: &str, zero_ok: bool, below_one: bool| -> Option<f64> {
-        let q = p.param(key)?;
-        match param_f64(q.value) {
-            Some(v) if (v > 0.0 || (zero_ok && v == 0.0)) && (!below_one || v < 1.0) => Some(v),
-            _ => {
-                d.error(q.column, format!("SET_VELOCITY_LIMIT {key}: invalid value"));
-                None
-            }
-        }
-    };
-    LimitChange {
-        velocity_mm_s: get("VELOCITY", false, false),
-        accel_mm_s2: get("ACCEL", false, false),
-        square_corner_velocity_mm_s: get("SQUARE_CORNER_VELOCITY", true, false),
-        minimum_cruise_ratio: get("MINIMUM_CRUISE_RATIO", true, true),
-        accel_to_decel_mm_s2: get("ACCEL_TO_DECEL", false, false),
-    }
-}
-
-/// Klipper's SET_INPUT_SHAPER parameters (input_shaper.py `InputShaperParams.update`):
-/// SHAPER_TYPE for both axes or SHAPER_TYPE_X/_Y, SHAPER_FREQ_X/_Y (≥ 0),
-/// DAMPING_RATIO_X/_Y (≥ 0). A type Klipper does not know is an error, as in Klipper.
-fn set_input_shaper(p: &ParsedLine, d: &mut Diags<impl FnMut(Diagnostic)>) -> ShaperChange {
-    let mut change = ShaperChange::default();
-    let kind = |key: &str, d: &mut Diags<_>| -> Option<ShaperType> {
-        let q = p.param(key)?;
-        let name = String::from_utf8_lossy(q.value);
-        let k = ShaperType::from_name(&name);
-        if k.is_none() {
-            d.error(q.column, format!("{key}: unsupported shaper type `{name}`"));
-        }
-        k
-    };
-    let both = kind("SHAPER_TYPE", d);
-    change.kind = [
-        kind("SHAPER_TYPE_X", d).or(both),
-        kind("SHAPER_TYPE_Y", d).or(both),
-    ];
-    let number = |key: &str, d: &mut Diags<_>| -> Option<f64> {
-        let q = p.param(key)?;
-        match param_f64(q.value) {
-            Some(v) if v >= 0.0 => Some(v),
-            _ => {
-                d.error(q.column, format!("SET_INPUT_SHAPER {key}: invalid value"));
-                None
-            }
-        }
-    };
-    change.freq_hz = [number("SHAPER_FREQ_X", d), number("SHAPER_FREQ_Y", d)];
-    change.damping_ratio = [number("DAMPING_RATIO_X", d), number("DAMPING_RATIO_Y", d)];
-    change
 }
 
 /// Where events of the current line go.
