@@ -116,3 +116,31 @@ fn the_trace_commands_marlins_steps() {
         assert!((k - k.round()).abs() < 0.085, "{k}");
     }
 }
+
+#[test]
+fn a_failing_file_on_a_marlin_profile_gets_no_klipper_recommendation() {
+    // The Marlin test profile with a motor too weak to hold the effector up: every move
+    // fails, and the recommendation (which changes Klipper's limits) says it is not made.
+    let dir = tempfile::tempdir().unwrap();
+    let weak = dir.path().join("weak.yaml");
+    let profile = std::fs::read_to_string(repo(MARLIN)).unwrap();
+    std::fs::write(
+        &weak,
+        profile.replace("  max_force_n: 25.0", "  max_force_n: 0.5"),
+    )
+    .unwrap();
+    let file = repo("samples/over-limit.gcode").display().to_string();
+    let o = run(&[
+        "check",
+        &file,
+        "-m",
+        &weak.display().to_string(),
+        "--format",
+        "json",
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(v["recommendation"].is_null(), "{}", v["recommendation"]);
+    let why = v["recommendation_error"].as_str().unwrap();
+    assert!(why.contains("Marlin profile"), "{why}");
+}

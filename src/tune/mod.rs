@@ -24,7 +24,15 @@ use crate::report::Recommendation;
 
 /// The limits under which the whole file passes, each the largest of its kind the search
 /// found (the file's own where it needs no lower one), with the print time then.
+/// Not for a Marlin profile yet: the search changes Klipper's limits, which Marlin's
+/// planner does not read (its own are M201/M203/M204/M205).
 pub fn recommend(path: &Path, machine: &Machine) -> anyhow::Result<Recommendation> {
+    if let crate::machine::Firmware::Marlin(_) = machine.firmware {
+        anyhow::bail!(
+            "no recommendation for a Marlin profile yet (its limits are M201/M203/M204/M205, \
+             which the search does not change)"
+        );
+    }
     let p = search(path, machine, false)?;
     Ok(recommendation(&p))
 }
