@@ -180,51 +180,15 @@ fn the_recommendation_passes_and_lowers_the_limit_of_the_cause() {
 #[test]
 fn fix_passes_keeps_every_byte_and_is_idempotent() {
     for (file, machine, _) in CASES {
-        let dir = tempfile::tempdir().unwrap();
-        let out = dir.path().join("fixed.gcode");
-        let o = run(&[
-            "fix",
-            &p(file),
-            "-m",
-            &p(machine),
-            "-o",
-            &out.display().to_string(),
-            "--format",
-            "json",
-        ]);
-        assert_eq!(o.status.code(), Some(0), "{file}: {}", stderr(&o));
-        let f = json(&o);
-        let input = std::fs::read(repo(file)).unwrap();
-        let fixed = std::fs::read(&out).unwrap();
-        assert!(f["commands"].as_u64().unwrap() > 0, "{file}");
-        // The fixed file passes `check`, with the print time `fix` reported, no longer
-        // than with the limits for the whole file.
-        let c = run(&[
-            "check",
-            &out.display().to_string(),
-            "-m",
-            &p(machine),
-            "--format",
-            "json",
-        ]);
-        assert_eq!(c.status.code(), Some(0), "{file}: {}", stdout(&c));
-        let t = json(&c)["summary"]["print_time_s"].as_f64().unwrap();
-        assert!(
-            (t - f["print_time_s"].as_f64().unwrap()).abs() < 1e-9,
-            "{file}"
-        );
-        let t_rec = f["recommendation"]["print_time_s"].as_f64().unwrap();
-        assert!(
-            t <= t_rec + 1e-9,
-            "{file}: fix {t} s, recommendation {t_rec} s"
-        );
-        // Every added line is marked; without them, the input byte for byte.
-        let text = String::from_utf8(fixed.clone()).unwrap();
-        let kept: String = text
-            .split_inclusive('\n')
-            .filter(|l| !l.contains("; delta-gcode"))
-            .collect();
-        assert_eq!(kept.as_bytes(), &input[..], "{file}");
+        // Passes, keeps every byte, strips back, idempotent (common::fix).
+        let common::fix::Fixed {
+            input,
+            fixed,
+            out,
+            dir,
+            ..
+        } = common::fix::fix_and_verify(file, machine);
+        let text = String::from_utf8(fixed).unwrap();
         let added: Vec<&str> = text
             .lines()
             .filter(|l| l.contains("; delta-gcode"))
@@ -233,29 +197,7 @@ fn fix_passes_keeps_every_byte_and_is_idempotent() {
             added.iter().any(|l| l.starts_with("SET_VELOCITY_LIMIT ")),
             "{file}"
         );
-        // `strip` gives the input back.
-        let stripped = dir.path().join("stripped.gcode");
-        let s = run(&[
-            "strip",
-            &out.display().to_string(),
-            "-o",
-            &stripped.display().to_string(),
-        ]);
-        assert_eq!(s.status.code(), Some(0), "{}", stderr(&s));
-        assert_eq!(std::fs::read(&stripped).unwrap(), input, "{file}");
-        // Fixing the fixed file changes nothing; nor does fixing its annotated version
-        // (beyond dropping the notes).
-        let again = dir.path().join("again.gcode");
-        let o2 = run(&[
-            "fix",
-            &out.display().to_string(),
-            "-m",
-            &p(machine),
-            "-o",
-            &again.display().to_string(),
-        ]);
-        assert_eq!(o2.status.code(), Some(0), "{}", stderr(&o2));
-        assert_eq!(std::fs::read(&again).unwrap(), fixed, "{file}");
+        // Fixing its annotated version changes nothing beyond dropping the notes.
         let annotated = dir.path().join("annotated.gcode");
         let a = run(&[
             "annotate",

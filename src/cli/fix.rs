@@ -15,7 +15,6 @@ use super::common::{Format, MachineArg, RewriteArgs, text_or_json};
 use super::out::{say, stdout};
 use super::replace::replace_file;
 use delta_gcode::emit::{Drop, emit_with};
-use delta_gcode::machine::Firmware;
 use delta_gcode::report::{Recommendation, Report, write_text};
 use delta_gcode::tune::{FixPlan, Unfixable, plan_fix};
 
@@ -52,11 +51,6 @@ struct FixReport<'a> {
 
 pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
     let machine = args.machine.load()?;
-    if let Firmware::Marlin(_) = machine.firmware {
-        anyhow::bail!(
-            "fix: this build plans Marlin's moves as Klipper's; fix for a Marlin profile needs Marlin's planner (its commands would be M204 P T, M205 X Y Z, M203)"
-        );
-    }
     let plan = match plan_fix(&args.file, &machine) {
         Ok(p) => p,
         Err(e) if e.is::<Unfixable>() => {
@@ -134,8 +128,9 @@ fn summary_lines(plan: &FixPlan) -> Vec<String> {
     )];
     if let Some(r) = &plan.recommendation {
         lines.push(format!(
-            "; delta-gcode fix: with ACCEL={} SQUARE_CORNER_VELOCITY={} VELOCITY={} over the whole file it would take {:.1} s",
-            r.max_accel_mm_s2, r.square_corner_velocity_mm_s, r.max_velocity_mm_s, r.print_time_s
+            "; delta-gcode fix: with {} over the whole file it would take {:.1} s",
+            r.commands(),
+            r.print_time_s
         ));
     }
     lines

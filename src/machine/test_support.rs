@@ -20,3 +20,18 @@ motors: {max_force_n: 30}
 pub(crate) fn kossel_machine() -> Machine {
     Machine::from_yaml_str(KOSSEL_YAML, "test").unwrap()
 }
+
+/// The same machine driven by Marlin: accelerations 1000, jerk 10 (E 5), towers' feedrate
+/// 200.
+pub(crate) fn marlin_machine() -> Machine {
+    let yaml = format!(
+        "{KOSSEL_YAML}firmware: marlin
+marlin:
+  print_accel_mm_s2: 1000
+  travel_accel_mm_s2: 1000
+  jerk_mm_s: [10, 10, 10, 5]
+  max_feedrate_mm_s: [200, 200, 200, 200]
+"
+    );
+    Machine::from_yaml_str(&yaml, "test").unwrap()
+}

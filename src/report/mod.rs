@@ -53,13 +53,45 @@ pub struct Report {
     pub recommendation_error: Option<String>,
 }
 
-/// Limits under which a file passes, and its print time with them (`tune`).
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+/// Limits under which a file passes, and its print time with them (`tune`). For a Marlin
+/// profile the three limits are the largest M204 P/T, the towers' jerk (M205 X/Y/Z) and
+/// the towers' feedrate (M203 X/Y/Z), spelled out in `marlin`.
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Recommendation {
     pub max_accel_mm_s2: f64,
     pub square_corner_velocity_mm_s: f64,
     pub max_velocity_mm_s: f64,
     pub print_time_s: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub marlin: Option<MarlinRecommendation>,
+}
+
+/// Marlin's settings under which a file passes (each at most this, on every tower).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct MarlinRecommendation {
+    /// M204 P and T, mm/s².
+    pub print_accel_mm_s2: f64,
+    pub travel_accel_mm_s2: f64,
+    /// M205 X Y Z: the towers' classic jerk, mm/s.
+    pub jerk_mm_s: f64,
+    /// M203 X Y Z: the towers' max feedrate, mm/s.
+    pub max_feedrate_mm_s: f64,
+    /// The commands that set them, e.g. `M204 P1800 T1800`.
+    pub commands: Vec<String>,
+}
+
+impl Recommendation {
+    /// The limits as the firmware's commands: Marlin's M204, M205, M203, or Klipper's
+    /// `SET_VELOCITY_LIMIT`.
+    pub fn commands(&self) -> String {
+        match &self.marlin {
+            Some(m) => m.commands.join(", "),
+            None => format!(
+                "ACCEL={} SQUARE_CORNER_VELOCITY={} VELOCITY={}",
+                self.max_accel_mm_s2, self.square_corner_velocity_mm_s, self.max_velocity_mm_s
+            ),
+        }
+    }
 }
 
 #[derive(Clone, Debug, Default, Serialize)]

@@ -83,6 +83,8 @@ pub struct MoveStats {
     /// Largest pull of each parallelogram on the platform (positive: tension), N, and when.
     pub peak_tension_n: [f64; 3],
     pub peak_tension_t_s: [f64; 3],
+    /// The fastest any carriage ran, |q̇_i| mm/s.
+    pub peak_speed_mm_s: f64,
     /// The most severe geometric problem found, if any.
     pub problem: Option<Problem>,
     /// Near a singular pose: the tower (0 = A) whose carriage moves fastest relative to the
@@ -153,6 +155,7 @@ impl MoveStats {
             worst: [Worst::default(); 3],
             peak_tension_n: [0.0; 3],
             peak_tension_t_s: [0.0; 3],
+            peak_speed_mm_s: 0.0,
             problem: None,
             near_singular: None,
             offset_mm: [0.0; 3],
@@ -171,6 +174,9 @@ impl MoveStats {
             let (mut ratio, mut ratio_at) = (self.worst[i].ratio, usize::MAX);
             let (mut pull, mut pull_at) = (self.peak_tension_n[i], usize::MAX);
             let (f, avail) = (run.force_n[i], run.available_n[i]);
+            self.peak_speed_mm_s = run.speed_mm_s[i]
+                .iter()
+                .fold(self.peak_speed_mm_s, |m, v| m.max(v.abs()));
             for (j, ((&q, &a), &t)) in f.iter().zip(avail).zip(run.tension_n[i]).enumerate() {
                 let up = t > pull;
                 pull = if up { t } else { pull };
@@ -213,6 +219,7 @@ impl MoveStats {
     pub fn merge(&mut self, later: &MoveStats) {
         self.samples += later.samples;
         self.offset_mm = later.offset_mm;
+        self.peak_speed_mm_s = self.peak_speed_mm_s.max(later.peak_speed_mm_s);
         for i in 0..3 {
             if later.peak_force_n[i] > self.peak_force_n[i] {
                 self.peak_force_n[i] = later.peak_force_n[i];
@@ -373,6 +380,7 @@ mod tests {
                         scan.peak_t_s[i] = t[k];
                         scan.peak_phase[i] = phase[k];
                     }
+                    scan.peak_speed_mm_s = scan.peak_speed_mm_s.max(v[i][k].abs());
                     if pull[i][k] > scan.peak_tension_n[i] {
                         scan.peak_tension_n[i] = pull[i][k];
                         scan.peak_tension_t_s[i] = t[k];

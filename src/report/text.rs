@@ -127,20 +127,26 @@ fn write_recommendation(out: &mut (impl Write + ?Sized), report: &Report) -> io:
         } else {
             String::new()
         };
+        let (units, change) = if r.marlin.is_some() {
+            (
+                "",
+                "set them in Marlin (Configuration.h, or send them and M500) where they are higher, and cap the file's own M204 / M205 / M203;",
+            )
+        } else {
+            (
+                " (mm/s², mm/s, mm/s)",
+                "lower printer.cfg's max_accel, square_corner_velocity, max_velocity where they are higher, and cap the file's own M204 / SET_VELOCITY_LIMIT;",
+            )
+        };
         writeln!(out)?;
         writeln!(
             out,
-            "  passes with   ACCEL={} SQUARE_CORNER_VELOCITY={} VELOCITY={} (mm/s², mm/s, mm/s): print time {} ({:.1} s{slower})",
-            r.max_accel_mm_s2,
-            r.square_corner_velocity_mm_s,
-            r.max_velocity_mm_s,
+            "  passes with   {}{units}: print time {} ({:.1} s{slower})",
+            r.commands(),
             clock(r.print_time_s),
             r.print_time_s
         )?;
-        writeln!(
-            out,
-            "                at most: lower printer.cfg's max_accel, square_corner_velocity, max_velocity where they are higher, and cap the file's own M204 / SET_VELOCITY_LIMIT;"
-        )?;
+        writeln!(out, "                at most: {change}")?;
         writeln!(
             out,
             "                or `delta-gcode fix` slows only the moves that need it"
@@ -193,12 +199,35 @@ mod tests {
             square_corner_velocity_mm_s: 5.0,
             max_velocity_mm_s: 250.0,
             print_time_s: 3.85,
+            marlin: None,
         });
         let mut buf = Vec::new();
         write_text(&mut buf, &r).unwrap();
         let text = String::from_utf8(buf).unwrap();
         assert!(
             text.contains("passes with   ACCEL=2180 SQUARE_CORNER_VELOCITY=5 VELOCITY=250 (mm/s², mm/s, mm/s): print time 0:00:04 (3.9 s, +10.0 %)"),
+            "{text}"
+        );
+        let mut m = r.recommendation.clone().unwrap();
+        m.marlin = Some(crate::report::MarlinRecommendation {
+            print_accel_mm_s2: 2180.0,
+            travel_accel_mm_s2: 2000.0,
+            jerk_mm_s: 5.0,
+            max_feedrate_mm_s: 250.0,
+            commands: vec!["M204 P2180 T2000".into(), "M205 X5 Y5 Z5".into()],
+        });
+        r.recommendation = Some(m);
+        let mut buf = Vec::new();
+        write_text(&mut buf, &r).unwrap();
+        let text = String::from_utf8(buf).unwrap();
+        assert!(
+            text.contains(
+                "passes with   M204 P2180 T2000, M205 X5 Y5 Z5: print time 0:00:04 (3.9 s, +10.0 %)"
+            ),
+            "{text}"
+        );
+        assert!(
+            text.contains("cap the file's own M204 / M205 / M203"),
             "{text}"
         );
         r.recommendation = None;

@@ -1,15 +1,18 @@
-//! The three toolhead limits the tuning lowers, and the edit of the event stream that
-//! applies caps to them: what the firmware would do with limit commands added before the
+//! The three limits the tuning lowers, and the edit of the event stream that applies caps
+//! to them: what the firmware would do with limit commands added before the
 //! moves (`fix`) or with lower limits everywhere (the recommendation).
 
 use std::collections::VecDeque;
 use std::sync::{Arc, Mutex};
 
+use super::held::{FileLimits, Held};
 use crate::gcode::{Event, LimitChange};
 use crate::machine::Machine;
 
-/// Klipper's acceleration, square-corner velocity and velocity limits (toolhead.py
-/// `set_max_velocities`), mm/s², mm/s, mm/s.
+/// The three limits the tuning lowers, one per cause, mm/s², mm/s, mm/s: Klipper's
+/// acceleration, square-corner velocity and velocity (toolhead.py `set_max_velocities`);
+/// for Marlin, caps on M204 P/T, on the towers' classic jerk M205 X/Y/Z and on their
+/// feedrate M203 X/Y/Z (`held`).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Toolhead {
     pub accel_mm_s2: f64,
@@ -117,26 +120,28 @@ pub struct MoveLimits {
 /// stage that sees the moves' results takes them. Bounded by the moves in flight.
 pub type InFlight = Arc<Mutex<VecDeque<MoveLimits>>>;
 
-/// A limit command added before a move: its line and the change.
+/// A limit command added before a move: its line and the event (Klipper's
+/// `Event::Limits`, or one `Event::Marlin` per command).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Added {
     pub before_line: u64,
-    pub change: LimitChange,
+    pub event: Event,
 }
 
 /// The edit of the events: the file's own limit changes go through (they are what the
 /// file set, restored after a capped range); before each move whose limits differ from
-/// what the firmware has, a change to `min(the file's, the caps)`.
+/// what the firmware has, the changes to `min(the file's, the caps)`, in the firmware's
+/// own events (Klipper's `SET_VELOCITY_LIMIT`, Marlin's M204/M205/M203: [`Held`]).
 pub struct CapEdit<'s> {
     segments: &'s Segments,
     next: usize,
     global: Toolhead,
     /// What the file set (the profile's limits until it sets one).
-    file: Toolhead,
+    file: FileLimits,
     /// What the firmware has now.
-    firmware: Toolhead,
+    firmware: FileLimits,
     /// The largest limits the file set.
-    pub file_peak: Toolhead,
+    pub file_peak: Held,
     pub in_flight: InFlight,
     /// The limit commands added, when kept (for `fix`'s output).
     pub added: Option<Vec<Added>>,
@@ -144,14 +149,14 @@ pub struct CapEdit<'s> {
 
 impl<'s> CapEdit<'s> {
     pub fn new(machine: &Machine, segments: &'s Segments, global: Toolhead, keep: bool) -> Self {
-        let start = Toolhead::of(machine);
+        let start = FileLimits::of(machine);
         CapEdit {
             segments,
             next: 0,
             global,
+            file_peak: start.held(),
+            firmware: start.clone(),
             file: start,
-            firmware: start,
-            file_peak: start,
             in_flight: InFlight::default(),
             added: keep.then(Vec::new),
         }
@@ -171,40 +176,35 @@ impl<'s> CapEdit<'s> {
     /// Takes one event of the interpreter; hands on what the firmware is to see.
     pub fn edit(&mut self, event: Event, out: &mut dyn FnMut(Event)) {
         match &event {
-            Event::Limits { change, .. } => {
-                self.file.apply(change);
-                self.file_peak = self.file_peak.max(&self.file);
-                self.firmware.apply(change);
-            }
             Event::Move(m) => {
                 let caps = self.caps(m.line);
-                let want = self.file.min(&caps);
-                if want != self.firmware {
-                    let change = want.change_from(&self.firmware);
-                    if let Some(added) = &mut self.added {
-                        added.push(Added {
-                            before_line: m.line,
-                            change,
-                        });
+                let want = self.file.held().capped(&caps);
+                let have = self.firmware.held();
+                if want != have {
+                    for e in want.events_from(&have, m.line) {
+                        if let Some(added) = &mut self.added {
+                            added.push(Added {
+                                before_line: m.line,
+                                event: e,
+                            });
+                        }
+                        out(e);
                     }
-                    out(Event::Limits {
-                        line: m.line,
-                        change,
-                    });
-                    self.firmware = want;
-                }
-                let mut limits = want;
-                if m.feed_mm_s > 0.0 {
-                    limits.velocity_mm_s = limits.velocity_mm_s.min(m.feed_mm_s);
+                    self.firmware.set(&want);
                 }
                 if let Ok(mut q) = self.in_flight.lock() {
                     q.push_back(MoveLimits {
                         line: m.line,
-                        limits,
+                        limits: want.ran(m),
                     });
                 }
             }
-            _ => {}
+            e => {
+                if self.file.apply(e) {
+                    self.file_peak = self.file_peak.max(&self.file.held());
+                    self.firmware.apply(e);
+                }
+            }
         }
         out(event);
     }
@@ -290,7 +290,7 @@ mod tests {
             ]
         );
         assert_eq!(edit.added.as_ref().map(Vec::len), Some(3));
-        assert_eq!(edit.file_peak.accel_mm_s2, 6000.0);
+        assert_eq!(edit.file_peak.knobs().accel_mm_s2, 6000.0);
         // The moves' limits, velocity capped by their feed.
         assert_eq!(limits_of(&edit.in_flight, 3).unwrap().accel_mm_s2, 1000.0);
         let six = limits_of(&edit.in_flight, 6).unwrap();

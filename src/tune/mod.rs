@@ -8,42 +8,57 @@
 
 pub mod capacity;
 mod commands;
+mod held;
 mod limits;
 mod search;
 
 use std::collections::BTreeMap;
 use std::path::Path;
 
-pub use commands::LimitCommands;
+pub use held::{Held, MarlinLimits};
 pub use limits::{Added, CapEdit, Toolhead};
 pub use search::{Cause, FLOOR, MIN_STEP, Over, Passed, TARGET, Unfixable, search, wanted};
 
 use crate::emit::Additions;
+use crate::gcode::Event;
 use crate::machine::Machine;
-use crate::report::Recommendation;
+use crate::report::{MarlinRecommendation, Recommendation};
 
 /// The limits under which the whole file passes, each the largest of its kind the search
-/// found (the file's own where it needs no lower one), with the print time then.
-/// Not for a Marlin profile yet: the search changes Klipper's limits, which Marlin's
-/// planner does not read (its own are M201/M203/M204/M205).
+/// found (the file's own where it needs no lower one), with the print time then: Klipper's,
+/// or Marlin's M204 P/T, M205 X/Y/Z and M203 X/Y/Z (`held`).
 pub fn recommend(path: &Path, machine: &Machine) -> anyhow::Result<Recommendation> {
-    if let crate::machine::Firmware::Marlin(_) = machine.firmware {
-        anyhow::bail!(
-            "no recommendation for a Marlin profile yet (its limits are M201/M203/M204/M205, \
-             which the search does not change)"
-        );
-    }
     let p = search(path, machine, false)?;
     Ok(recommendation(&p))
 }
 
 fn recommendation(p: &Passed) -> Recommendation {
-    let caps = p.global.min(&p.file_peak);
+    let capped = p.file_peak.capped(&p.global);
+    let caps = capped.knobs();
+    let marlin = match capped {
+        Held::Marlin(m) => Some(MarlinRecommendation {
+            print_accel_mm_s2: m.print_accel_mm_s2,
+            travel_accel_mm_s2: m.travel_accel_mm_s2,
+            jerk_mm_s: caps.scv_mm_s,
+            max_feedrate_mm_s: caps.velocity_mm_s,
+            commands: MarlinLimits {
+                jerk_mm_s: [caps.scv_mm_s; 3],
+                max_feedrate_mm_s: [caps.velocity_mm_s; 3],
+                ..m
+            }
+            .all_changes()
+            .into_iter()
+            .filter_map(|change| commands::command(&Event::Marlin { line: 0, change }))
+            .collect(),
+        }),
+        Held::Klipper(_) => None,
+    };
     Recommendation {
         max_accel_mm_s2: caps.accel_mm_s2,
         square_corner_velocity_mm_s: caps.scv_mm_s,
         max_velocity_mm_s: caps.velocity_mm_s,
         print_time_s: p.print_time_s,
+        marlin,
     }
 }
 
@@ -80,13 +95,13 @@ pub fn plan_fix(path: &Path, machine: &Machine) -> anyhow::Result<FixPlan> {
             (global, Some(rec), false)
         }
     };
-    let emitter = LimitCommands::of(machine);
     let mut before: BTreeMap<u64, Vec<String>> = BTreeMap::new();
     let mut commands = 0;
     for a in &chosen.added {
-        let lines = emitter.lines(&a.change);
-        commands += lines.len();
-        before.entry(a.before_line).or_default().extend(lines);
+        if let Some(line) = commands::line(&a.event) {
+            commands += 1;
+            before.entry(a.before_line).or_default().push(line);
+        }
     }
     Ok(FixPlan {
         additions: Additions {

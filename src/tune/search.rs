@@ -14,6 +14,11 @@
 //!   through two passes (the affine law solved exactly);
 //! - cruising at constant nozzle speed: the carriages' accelerations go as the speed
 //!   squared → the velocity, by the square root of the ratio.
+//!
+//! For a Marlin profile the same three limits are Marlin's (`held`): M204 P/T, the towers'
+//! classic jerk M205 X/Y/Z (a junction's jump in tower speeds scales with it), the towers'
+//! feedrate M203 X/Y/Z (the carriage speed itself: the curve's speed is the cap, and a
+//! move's limit is at most the fastest its carriages ran).
 
 use std::collections::{BTreeMap, VecDeque};
 use std::fs::File;
@@ -28,6 +33,7 @@ use crate::machine::{Machine, Motors};
 use crate::motion::Phase;
 use crate::report::{MoveStats, Report};
 
+use super::held::Held;
 use super::limits::{Added, CapEdit, Segments, Toolhead, limits_of, segments};
 
 /// The share of the available force the search aims at: a little below all of it.
@@ -114,12 +120,19 @@ fn speed_for_force(motors: &Motors, force_n: f64, speed_mm_s: f64) -> f64 {
 /// (see the module documentation); another limit when that one is at its floor. `ran`: the
 /// limits the move ran with; `earlier`: the same move's cause, limit and ratio in an
 /// earlier pass, for the secant. None: the move is not over the force or the arms' hold.
+///
+/// `jump_omega`: Marlin's junctions through a drive of this angular frequency (rad/s).
+/// Marlin's blocks meet every 1/`segments_per_second` s with a small velocity jump, so
+/// nearly every instant lies in a corner's window; a jump Δv makes a spring drive ring
+/// with a peak acceleration Δv·ω, so a corner whose jerk·ω is below the acceleration is
+/// the acceleration's.
 pub fn wanted(
     m: &MoveStats,
     hold_n: Option<f64>,
     ran: &Toolhead,
     motors: &Motors,
     earlier: Option<(Cause, f64, f64)>,
+    jump_omega: Option<f64>,
 ) -> Option<Over> {
     let tower = m.worst_use_tower();
     let w = m.worst[tower];
@@ -129,7 +142,9 @@ pub fn wanted(
         if w.available_n < plateau && needed < plateau && w.speed_mm_s > 0.0 {
             let s = speed_for_force(motors, needed, w.speed_mm_s);
             (Cause::Speed, w.ratio, s / w.speed_mm_s)
-        } else if w.phase == Phase::Corner {
+        } else if w.phase == Phase::Corner
+            && jump_omega.is_none_or(|om| ran.scv_mm_s * om >= ran.accel_mm_s2)
+        {
             (Cause::Corner, w.ratio, TARGET / w.ratio)
         } else {
             // Accelerating, braking, or cruising or at rest after it while the drive
@@ -152,11 +167,16 @@ pub fn wanted(
         Cause::Speed => [Cause::Speed, Cause::Accel, Cause::Corner],
     };
     // The limit lowered in the earlier pass, unless lowering it did not help: then the
-    // next one; and never one at its floor.
+    // next one; and never one at its floor. The speed stays the cause while the curve
+    // is (a motor past its top speed gives no force: the ratio says nothing then).
     let start = match earlier {
         Some((c, x1, r1)) if c.value(ran) < x1 => {
             let i = order.iter().position(|&o| o == c).unwrap_or(0);
-            if ratio < r1 { i } else { i + 1 }
+            if ratio < r1 || (c == first && c == Cause::Speed) {
+                i
+            } else {
+                i + 1
+            }
         }
         _ => 0,
     };
@@ -231,7 +251,7 @@ struct Pass {
     over: Vec<Flagged>,
     /// Moves over that no limit left above its floor can help.
     stuck: Vec<u64>,
-    file_peak: Toolhead,
+    file_peak: Held,
     added: Vec<Added>,
 }
 
@@ -244,7 +264,7 @@ pub struct Passed {
     pub added: Vec<Added>,
     pub print_time_s: f64,
     /// The largest limits the file itself set (the profile's where it set none).
-    pub file_peak: Toolhead,
+    pub file_peak: Held,
     /// The passes it took.
     pub passes: usize,
     /// The print time of the first pass (the file as it is, when it did not pass), s.
@@ -273,6 +293,14 @@ fn pass(
     // The last move lines, and the flagged moves still collecting the lines after them.
     let mut recent: VecDeque<u64> = VecDeque::new();
     let mut collecting: Vec<usize> = Vec::new();
+    // Marlin's speed limit is the towers' (M203): a move ran no faster than its carriages.
+    let tower_speed = matches!(machine.firmware, crate::machine::Firmware::Marlin(_));
+    let jump_omega = match machine.drive {
+        crate::motion::drive::Drive::Spring(s) if tower_speed => {
+            Some(std::f64::consts::TAU * s.frequency_hz)
+        }
+        _ => None,
+    };
     let totals = crate::analysis::run_edited(
         input,
         machine,
@@ -280,7 +308,12 @@ fn pass(
         &mut |e, out| edit.edit(e, out),
         |r| {
             let line = r.stats.line;
-            let ran = limits_of(&in_flight, line);
+            let ran = limits_of(&in_flight, line).map(|mut t| {
+                if tower_speed {
+                    t.velocity_mm_s = t.velocity_mm_s.min(r.stats.peak_speed_mm_s);
+                }
+                t
+            });
             for &i in &collecting {
                 let f: &mut Flagged = &mut over[i];
                 f.after.push(line);
@@ -294,7 +327,8 @@ fn pass(
             {
                 let earlier = history.get(&line).copied();
                 let hold = machine.geometry.arm_magnet_hold_n;
-                if let Some(o) = wanted(&r.stats, hold, &ran, &machine.motors, earlier) {
+                if let Some(o) = wanted(&r.stats, hold, &ran, &machine.motors, earlier, jump_omega)
+                {
                     collecting.push(over.len());
                     over.push(Flagged {
                         line,
@@ -507,6 +541,7 @@ mod tests {
             &RAN,
             &motors,
             None,
+            None,
         )
         .unwrap();
         assert_eq!((o.cause, o.ran), (Cause::Speed, 200.0));
@@ -519,12 +554,12 @@ mod tests {
     fn corners_lower_the_scv_and_accelerations_the_accel_by_the_ratio() {
         let motors = Machine::from_yaml_str(KOSSEL_YAML, "t").unwrap().motors;
         let corner = flagged(&motors, 45.0, 10.0, Phase::Corner);
-        let o = wanted(&corner, None, &RAN, &motors, None).unwrap();
+        let o = wanted(&corner, None, &RAN, &motors, None, None).unwrap();
         assert_eq!(o.cause, Cause::Corner);
         assert!((o.ratio - 1.5).abs() < 1e-12);
         assert!((o.wanted - 8.0 * TARGET / 1.5).abs() < 1e-12);
         let accel = flagged(&motors, 36.0, 10.0, Phase::Decel);
-        let o = wanted(&accel, None, &RAN, &motors, None).unwrap();
+        let o = wanted(&accel, None, &RAN, &motors, None, None).unwrap();
         assert_eq!(o.cause, Cause::Accel);
         assert!((o.wanted - 4000.0 * TARGET / 1.2).abs() < 1e-9);
         // The secant: at 5000 the ratio was 1.4, at 4000 it is 1.2: the affine law reaches
@@ -535,6 +570,7 @@ mod tests {
             &RAN,
             &motors,
             Some((Cause::Accel, 5000.0, 1.4)),
+            None,
         )
         .unwrap();
         assert!((o.wanted - 2850.0).abs() < 1e-9, "{o:?}");
@@ -545,6 +581,7 @@ mod tests {
             &RAN,
             &motors,
             Some((Cause::Accel, 5000.0, 1.1)),
+            None,
         )
         .unwrap();
         assert_eq!(o.cause, Cause::Speed);
@@ -554,7 +591,9 @@ mod tests {
             ..RAN
         };
         assert_eq!(
-            wanted(&corner, None, &floor, &motors, None).unwrap().cause,
+            wanted(&corner, None, &floor, &motors, None, None)
+                .unwrap()
+                .cause,
             Cause::Accel
         );
         // Within the force: nothing to do.
@@ -564,10 +603,30 @@ mod tests {
                 None,
                 &RAN,
                 &motors,
+                None,
                 None
             )
             .is_none()
         );
+    }
+
+    #[test]
+    fn a_marlin_corner_is_the_jerk_s_only_when_its_ringing_outweighs_the_acceleration() {
+        let motors = Machine::from_yaml_str(KOSSEL_YAML, "t").unwrap().motors;
+        let corner = flagged(&motors, 45.0, 10.0, Phase::Corner);
+        // jerk 8 mm/s through a 60 Hz drive: 8 · 377 = 3016 mm/s² of ringing.
+        let omega = std::f64::consts::TAU * 60.0;
+        let cause = |accel: f64| {
+            let ran = Toolhead {
+                accel_mm_s2: accel,
+                ..RAN
+            };
+            wanted(&corner, None, &ran, &motors, None, Some(omega))
+                .unwrap()
+                .cause
+        };
+        assert_eq!(cause(3000.0), Cause::Corner);
+        assert_eq!(cause(3100.0), Cause::Accel);
     }
 
     #[test]

@@ -1,6 +1,8 @@
 //! Shared helpers of the end-to-end tests: run the binary, read the repository's files.
 #![allow(dead_code)] // each test crate uses its own subset
 
+pub mod fix;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
