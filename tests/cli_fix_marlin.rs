@@ -254,3 +254,54 @@ fn fix_inserts_marlin_s_commands_restores_the_file_s_own_and_is_idempotent() {
         assert_eq!(capped_end, orig_end, "{file}");
     }
 }
+
+#[test]
+fn fix_reads_standard_input_and_writes_standard_output() {
+    let (file, machine, _) = CASES[1];
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("fixed.gcode");
+    let o = run(&[
+        "fix",
+        &p(file),
+        "-m",
+        &p(machine),
+        "-o",
+        &out.display().to_string(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let input = std::fs::read(repo(file)).unwrap();
+    let piped = common::bin()
+        .args(["fix", "-", "-m", &p(machine), "-o", "-"])
+        .stdin(std::fs::File::open(repo(file)).unwrap())
+        .output()
+        .unwrap();
+    assert_eq!(piped.status.code(), Some(0), "{}", stderr(&piped));
+    // The same G-code as from the file, and only G-code on stdout; the report on stderr.
+    assert_eq!(piped.stdout, std::fs::read(&out).unwrap());
+    let kept: Vec<u8> = piped
+        .stdout
+        .split_inclusive(|b| *b == b'\n')
+        .filter(|l| !l.ends_with(b"; delta-gcode\n"))
+        .flatten()
+        .copied()
+        .collect();
+    assert_eq!(common::strip_ours(&kept), input);
+    assert!(
+        stderr(&piped).contains("limit commands added"),
+        "{}",
+        stderr(&piped)
+    );
+    assert!(
+        stderr(&piped).contains("<stdout>: OK"),
+        "{}",
+        stderr(&piped)
+    );
+    // Standard input cannot be replaced in place.
+    let o = run(&["fix", "-", "--in-place", "-m", &p(machine)]);
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("--in-place needs a file"),
+        "{}",
+        stderr(&o)
+    );
+}
