@@ -140,12 +140,13 @@ fn the_recommendation_passes_and_lowers_the_limit_of_the_cause() {
         let gcode = std::fs::read_to_string(repo(file)).unwrap();
         let profile = std::fs::read_to_string(repo(machine)).unwrap();
         let peak = file_peak(&gcode, &profile);
-        // The limit of the cause came down, the others stayed where the file had them.
+        // The limit of the cause came down; the others are at most where the file had
+        // them (a quicker combination may lower one of them instead of more of the cause).
         for i in 0..3 {
             if i == cause {
                 assert!(rec[i] < peak[i], "{file}: {i}: {rec:?} vs {peak:?}");
             } else {
-                assert_eq!(rec[i], peak[i], "{file}: {i}: {rec:?} vs {peak:?}");
+                assert!(rec[i] <= peak[i], "{file}: {i}: {rec:?} vs {peak:?}");
             }
         }
         // Slower than the file as it is, as the report says.

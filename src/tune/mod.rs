@@ -7,6 +7,7 @@
 //! caps and the commands `fix` adds (a few per flagged move).
 
 pub mod capacity;
+mod cheapest;
 mod commands;
 mod held;
 mod limits;
@@ -28,8 +29,7 @@ use crate::report::{MarlinRecommendation, Recommendation};
 /// found (the file's own where it needs no lower one), with the print time then: Klipper's,
 /// or Marlin's M204 P/T, M205 X/Y/Z and M203 X/Y/Z (`held`).
 pub fn recommend(path: &Path, machine: &Machine) -> anyhow::Result<Recommendation> {
-    let p = search(path, machine, false)?;
-    Ok(recommendation(&p))
+    Ok(recommendation(&cheapest::cheapest(path, machine)?))
 }
 
 fn recommendation(p: &Passed) -> Recommendation {
@@ -87,7 +87,7 @@ pub fn plan_fix(path: &Path, machine: &Machine) -> anyhow::Result<FixPlan> {
     let (chosen, recommendation, is_local) = if local.passes == 1 {
         (local, None, true)
     } else {
-        let global = search(path, machine, false)?;
+        let global = cheapest::cheapest(path, machine)?;
         let rec = recommendation(&global);
         if local.print_time_s <= global.print_time_s {
             (local, Some(rec), true)

@@ -60,7 +60,9 @@ pub enum Cause {
 }
 
 impl Cause {
-    fn value(self, t: &Toolhead) -> f64 {
+    pub const ALL: [Cause; 3] = [Cause::Accel, Cause::Corner, Cause::Speed];
+
+    pub fn value(self, t: &Toolhead) -> f64 {
         match self {
             Cause::Accel => t.accel_mm_s2,
             Cause::Corner => t.scv_mm_s,
@@ -68,7 +70,7 @@ impl Cause {
         }
     }
 
-    fn set(self, t: &mut Toolhead, v: f64) {
+    pub fn set(self, t: &mut Toolhead, v: f64) {
         match self {
             Cause::Accel => t.accel_mm_s2 = v,
             Cause::Corner => t.scv_mm_s = v,
@@ -78,7 +80,7 @@ impl Cause {
 
     /// A limit lowered to a round figure, not below the floor: accel to 10 mm/s², scv to
     /// 0.1 mm/s, velocity to 1 mm/s.
-    fn round_down(self, v: f64) -> f64 {
+    pub fn round_down(self, v: f64) -> f64 {
         let step = match self {
             Cause::Accel => 10.0,
             Cause::Corner => 0.1,
@@ -87,6 +89,35 @@ impl Cause {
         // Whole steps, printed as they are computed (e.g. 3.7, not 3.7000000000000006).
         let r = ((v / step).floor() * step * 10.0).round() / 10.0;
         r.max(self.value(&FLOOR))
+    }
+}
+
+/// What a search may lower, and how it reads Marlin's corners.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Rules {
+    /// No limit goes below this; a limit at infinity is not lowered at all.
+    pub floor: Toolhead,
+    /// Marlin's junctions through a drive of this angular frequency (rad/s): see
+    /// [`wanted`].
+    pub jump_omega: Option<f64>,
+    /// Passes before the search gives up.
+    pub max_passes: usize,
+}
+
+impl Rules {
+    /// [`FLOOR`], and the drive's ω for a Marlin profile with a spring drive.
+    pub fn of(machine: &Machine) -> Rules {
+        let marlin = matches!(machine.firmware, crate::machine::Firmware::Marlin(_));
+        Rules {
+            floor: FLOOR,
+            max_passes: MAX_PASSES,
+            jump_omega: match machine.drive {
+                crate::motion::drive::Drive::Spring(s) if marlin => {
+                    Some(std::f64::consts::TAU * s.frequency_hz)
+                }
+                _ => None,
+            },
+        }
     }
 }
 
@@ -121,7 +152,7 @@ fn speed_for_force(motors: &Motors, force_n: f64, speed_mm_s: f64) -> f64 {
 /// limits the move ran with; `earlier`: the same move's cause, limit and ratio in an
 /// earlier pass, for the secant. None: the move is not over the force or the arms' hold.
 ///
-/// `jump_omega`: Marlin's junctions through a drive of this angular frequency (rad/s).
+/// `rules.jump_omega`: Marlin's junctions through a drive of this angular frequency (rad/s).
 /// Marlin's blocks meet every 1/`segments_per_second` s with a small velocity jump, so
 /// nearly every instant lies in a corner's window; a jump Δv makes a spring drive ring
 /// with a peak acceleration Δv·ω, so a corner whose jerk·ω is below the acceleration is
@@ -132,7 +163,7 @@ pub fn wanted(
     ran: &Toolhead,
     motors: &Motors,
     earlier: Option<(Cause, f64, f64)>,
-    jump_omega: Option<f64>,
+    rules: &Rules,
 ) -> Option<Over> {
     let tower = m.worst_use_tower();
     let w = m.worst[tower];
@@ -143,7 +174,9 @@ pub fn wanted(
             let s = speed_for_force(motors, needed, w.speed_mm_s);
             (Cause::Speed, w.ratio, s / w.speed_mm_s)
         } else if w.phase == Phase::Corner
-            && jump_omega.is_none_or(|om| ran.scv_mm_s * om >= ran.accel_mm_s2)
+            && rules
+                .jump_omega
+                .is_none_or(|om| ran.scv_mm_s * om >= ran.accel_mm_s2)
         {
             (Cause::Corner, w.ratio, TARGET / w.ratio)
         } else {
@@ -182,7 +215,7 @@ pub fn wanted(
     };
     let cause = (start..start + 3)
         .map(|i| order[i % 3])
-        .find(|c| c.value(ran) > c.value(&FLOOR))?;
+        .find(|c| c.value(ran) > c.value(&rules.floor))?;
     let scale = match cause {
         c if c == first => scale,
         // The speed's own force terms go as its square (eq. 14's C(q, q̇)q̇).
@@ -279,6 +312,7 @@ fn pass(
     segments: &Segments,
     global: Toolhead,
     history: &History,
+    rules: &Rules,
 ) -> anyhow::Result<Pass> {
     let file = File::open(path).with_context(|| format!("cannot open {}", path.display()))?;
     let input = BufReader::with_capacity(1 << 16, WithoutOurs::new(file));
@@ -295,12 +329,6 @@ fn pass(
     let mut collecting: Vec<usize> = Vec::new();
     // Marlin's speed limit is the towers' (M203): a move ran no faster than its carriages.
     let tower_speed = matches!(machine.firmware, crate::machine::Firmware::Marlin(_));
-    let jump_omega = match machine.drive {
-        crate::motion::drive::Drive::Spring(s) if tower_speed => {
-            Some(std::f64::consts::TAU * s.frequency_hz)
-        }
-        _ => None,
-    };
     let totals = crate::analysis::run_edited(
         input,
         machine,
@@ -327,8 +355,7 @@ fn pass(
             {
                 let earlier = history.get(&line).copied();
                 let hold = machine.geometry.arm_magnet_hold_n;
-                if let Some(o) = wanted(&r.stats, hold, &ran, &machine.motors, earlier, jump_omega)
-                {
+                if let Some(o) = wanted(&r.stats, hold, &ran, &machine.motors, earlier, rules) {
                     collecting.push(over.len());
                     over.push(Flagged {
                         line,
@@ -391,13 +418,30 @@ fn cannot(report: &Report, line: u64, why: &'static str) -> anyhow::Error {
 /// (`fix`). Errors when a move cannot pass at any limit (unreachable, out of the disc, or
 /// still over at [`FLOOR`]).
 pub fn search(path: &Path, machine: &Machine, local: bool) -> anyhow::Result<Passed> {
-    let mut global = Toolhead::UNLIMITED;
+    search_from(
+        path,
+        machine,
+        local,
+        Toolhead::UNLIMITED,
+        &Rules::of(machine),
+    )
+}
+
+/// [`search`] from the caps `global` over the whole file, lowering limits only down to
+/// `rules.floor`.
+pub fn search_from(
+    path: &Path,
+    machine: &Machine,
+    local: bool,
+    mut global: Toolhead,
+    rules: &Rules,
+) -> anyhow::Result<Passed> {
     let mut anchors: BTreeMap<u64, Anchor> = BTreeMap::new();
     let mut history = History::new();
     let mut first_print_time_s = None;
-    for passes in 1..=MAX_PASSES {
+    for passes in 1..=rules.max_passes {
         let segs = segments(anchors.iter().map(|(&l, a)| a.range(l)));
-        let p = pass(path, machine, &segs, global, &history)?;
+        let p = pass(path, machine, &segs, global, &history, rules)?;
         let first = *first_print_time_s.get_or_insert(p.report.summary.print_time_s);
         if p.report.summary.errors > 0 {
             anyhow::bail!(
@@ -483,8 +527,9 @@ pub fn search(path: &Path, machine: &Machine, local: bool) -> anyhow::Result<Pas
         }
     }
     anyhow::bail!(
-        "{}: no limits found that pass after {MAX_PASSES} passes",
-        path.display()
+        "{}: no limits found that pass after {} passes",
+        path.display(),
+        rules.max_passes
     )
 }
 
@@ -510,6 +555,12 @@ mod tests {
         });
         m
     }
+
+    const NO_MARLIN: Rules = Rules {
+        floor: FLOOR,
+        jump_omega: None,
+        max_passes: MAX_PASSES,
+    };
 
     const RAN: Toolhead = Toolhead {
         accel_mm_s2: 4000.0,
@@ -541,7 +592,7 @@ mod tests {
             &RAN,
             &motors,
             None,
-            None,
+            &NO_MARLIN,
         )
         .unwrap();
         assert_eq!((o.cause, o.ran), (Cause::Speed, 200.0));
@@ -554,12 +605,12 @@ mod tests {
     fn corners_lower_the_scv_and_accelerations_the_accel_by_the_ratio() {
         let motors = Machine::from_yaml_str(KOSSEL_YAML, "t").unwrap().motors;
         let corner = flagged(&motors, 45.0, 10.0, Phase::Corner);
-        let o = wanted(&corner, None, &RAN, &motors, None, None).unwrap();
+        let o = wanted(&corner, None, &RAN, &motors, None, &NO_MARLIN).unwrap();
         assert_eq!(o.cause, Cause::Corner);
         assert!((o.ratio - 1.5).abs() < 1e-12);
         assert!((o.wanted - 8.0 * TARGET / 1.5).abs() < 1e-12);
         let accel = flagged(&motors, 36.0, 10.0, Phase::Decel);
-        let o = wanted(&accel, None, &RAN, &motors, None, None).unwrap();
+        let o = wanted(&accel, None, &RAN, &motors, None, &NO_MARLIN).unwrap();
         assert_eq!(o.cause, Cause::Accel);
         assert!((o.wanted - 4000.0 * TARGET / 1.2).abs() < 1e-9);
         // The secant: at 5000 the ratio was 1.4, at 4000 it is 1.2: the affine law reaches
@@ -570,7 +621,7 @@ mod tests {
             &RAN,
             &motors,
             Some((Cause::Accel, 5000.0, 1.4)),
-            None,
+            &NO_MARLIN,
         )
         .unwrap();
         assert!((o.wanted - 2850.0).abs() < 1e-9, "{o:?}");
@@ -581,7 +632,7 @@ mod tests {
             &RAN,
             &motors,
             Some((Cause::Accel, 5000.0, 1.1)),
-            None,
+            &NO_MARLIN,
         )
         .unwrap();
         assert_eq!(o.cause, Cause::Speed);
@@ -591,7 +642,7 @@ mod tests {
             ..RAN
         };
         assert_eq!(
-            wanted(&corner, None, &floor, &motors, None, None)
+            wanted(&corner, None, &floor, &motors, None, &NO_MARLIN)
                 .unwrap()
                 .cause,
             Cause::Accel
@@ -604,7 +655,7 @@ mod tests {
                 &RAN,
                 &motors,
                 None,
-                None
+                &NO_MARLIN
             )
             .is_none()
         );
@@ -621,9 +672,19 @@ mod tests {
                 accel_mm_s2: accel,
                 ..RAN
             };
-            wanted(&corner, None, &ran, &motors, None, Some(omega))
-                .unwrap()
-                .cause
+            wanted(
+                &corner,
+                None,
+                &ran,
+                &motors,
+                None,
+                &Rules {
+                    jump_omega: Some(omega),
+                    ..NO_MARLIN
+                },
+            )
+            .unwrap()
+            .cause
         };
         assert_eq!(cause(3000.0), Cause::Corner);
         assert_eq!(cause(3100.0), Cause::Accel);
