@@ -141,7 +141,7 @@ impl Response {
             d1 * self.omega2 + d2 * (2.0 * self.sigma),
         );
         let decay = (-self.sigma * tau_s.max(0.0)).exp();
-        let amplitude = |c: Vec3, d: Vec3| c.zip_map(&d, |c, d| c.hypot(d) * decay);
+        let amplitude = |c: Vec3, d: Vec3| c.zip_map(&d, |c, d| (c * c + d * d).sqrt() * decay);
         Ringing {
             e_p,
             acc_p: e_p * (-self.omega2),

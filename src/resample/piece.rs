@@ -154,7 +154,11 @@ pub fn sample_piece(
                 period_s,
             };
             if end - k >= SPARSE_MIN_PIECE && out.sparse() {
-                grid.sparse(&mut walk, k, end, out);
+                // The first drive period rings from the piece's start (a junction, an
+                // acceleration step): sampled, its bound would not pass.
+                let settled = (k + (r.period_s() / period_s) as i64).min(end);
+                grid.sample(&mut walk, k, settled, out);
+                grid.sparse(&mut walk, settled, end, out);
             } else {
                 grid.sample(&mut walk, k, end, out);
             }
