@@ -11,6 +11,7 @@ pub mod delta;
 pub mod emit;
 pub mod firmware;
 pub mod gcode;
+pub mod interval;
 pub mod klipper_import;
 pub mod machine;
 pub mod motion;

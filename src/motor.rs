@@ -181,6 +181,38 @@ mod tests {
     }
 
     #[test]
+    fn the_available_force_never_rises_with_speed() {
+        // The sparse evaluation bounds the share of the available force with the force at
+        // the largest speed of a run: the curve must not rise anywhere, the knee included.
+        for figures in [
+            ldo(),
+            StepperFigures {
+                supply_voltage_v: 12.0,
+                inductance_mh: 0.0,
+                ..ldo()
+            },
+        ] {
+            let c = StepperCurve::new(&figures);
+            let top = 1.2 * c.zero_force_speed_mm_s();
+            let mut last = f64::INFINITY;
+            for k in 0..=200_000 {
+                let f = c.available_force_n(top * k as f64 / 200_000.0);
+                assert!(f <= last * (1.0 + 1e-12), "{k}: {f} > {last}");
+                last = f;
+            }
+            let knee = c.knee_speed_mm_s();
+            for x in [
+                knee * (1.0 - 1e-15),
+                knee,
+                knee * (1.0 + 1e-15),
+                knee * (1.0 + 1e-9),
+            ] {
+                assert!(c.available_force_n(x) <= c.plateau_force_n() * (1.0 + 1e-12));
+            }
+        }
+    }
+
+    #[test]
     fn ldo_matches_the_hand_computation() {
         // A colleague's hand computation: r = 6.366198 mm, k_e = 0.2085965 V·s/rad,
         // I_pk = 1.6970563 A, T = 0.354 N·m: 55.6062 N up to the knee at 433.76 mm/s;

@@ -23,7 +23,7 @@ mod observe;
 mod sequence;
 mod trace;
 
-pub use move_check::{MoveChecker, Scratch};
+pub use move_check::{DENSE_ENV, MoveChecker, Scratch};
 pub use observe::{Evaluated, Observer, Verdict, Window};
 pub use sequence::{Batch, MoveWork, Sequencer};
 pub use trace::{TraceRow, TraceRows, TraceWindow, trace_header};

@@ -1,13 +1,17 @@
 //! The moves' pieces through the model: sampled, a block of samples at a time through the
 //! vectorised forces, and each block's runs handed to the observers.
 
+use std::sync::atomic::{AtomicU64, Ordering};
+
 use crate::delta::{BLOCK, DeltaModel, ForceBlock, StateBlock};
 use crate::machine::Machine;
 use crate::motion::Segment;
 use crate::motion::drive::{Drive, Response};
 use crate::path::Path;
-use crate::report::{MoveStats, NEAR_SINGULAR_RATIO, Problem};
-use crate::resample::{Phase, PieceWork, Sample, SampleSink, sample_piece};
+use crate::report::{MoveStats, NEAR_SINGULAR_RATIO, Problem, share};
+use crate::resample::{
+    Phase, PieceWork, Sample, SampleSink, StateBox, peak_candidates, sample_piece,
+};
 
 use super::MoveResult;
 use super::observe::{Evaluated, Observer, Verdict, unreachable};
@@ -21,6 +25,14 @@ const GEOMETRY_TOLERANCE_MM: f64 = 1e-3;
 /// coordinate does, and would otherwise keep the check busy for hours.
 const MAX_SAMPLES_PER_PIECE: f64 = 1e7;
 
+/// Set (to anything) in the environment, `check` samples every piece densely: the sparse
+/// evaluation off (docs/performance.md), for comparisons.
+pub const DENSE_ENV: &str = "DELTA_GCODE_DENSE";
+
+/// A move is seeded for a sparse evaluation (its peak candidates computed first) when one
+/// of its pieces lasts this many sampling periods: shorter pieces are sampled whole.
+const SEED_MIN_PERIODS: f64 = 64.0;
+
 /// Checks moves against one machine, for the verdict and for `observer`. Shared between
 /// threads; each thread brings its own [`Scratch`].
 pub struct MoveChecker<'m, O = ()> {
@@ -28,18 +40,42 @@ pub struct MoveChecker<'m, O = ()> {
     model: DeltaModel,
     response: Option<Response>,
     observer: O,
+    /// Runs of samples whose bounds stay below the move's peaks are counted, not computed
+    /// (see [`SampleSink::skip`]): with a drive response, an observer that does not need
+    /// every sample, and no [`DENSE_ENV`].
+    sparse: bool,
+    /// Samples left uncomputed so far (all threads).
+    skipped: AtomicU64,
 }
 
 impl<'m, O: Observer> MoveChecker<'m, O> {
     pub fn new(machine: &'m Machine, observer: O) -> Self {
+        let response = match &machine.drive {
+            Drive::Rigid => None,
+            Drive::Spring(s) => Some(Response::new(s).with_step(machine.sampling.period_s)),
+        };
         MoveChecker {
             machine,
             model: machine.model(),
-            response: match &machine.drive {
-                Drive::Rigid => None,
-                Drive::Spring(s) => Some(Response::new(s).with_step(machine.sampling.period_s)),
-            },
+            sparse: response.is_some()
+                && !observer.every_sample()
+                && std::env::var_os(DENSE_ENV).is_none(),
+            response,
             observer,
+            skipped: AtomicU64::new(0),
+        }
+    }
+
+    /// Samples a sparse evaluation has counted without computing them so far.
+    pub fn skipped_samples(&self) -> u64 {
+        self.skipped.load(Ordering::Relaxed)
+    }
+
+    /// The same checker, every sample computed (no sparse evaluation).
+    pub fn dense(self) -> Self {
+        MoveChecker {
+            sparse: false,
+            ..self
         }
     }
 
@@ -69,7 +105,9 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
                 observed: self.observer.start(m.stats.line),
                 end_xy_mm: m.end_xy_mm,
             });
-            for work in pieces.iter().skip(m.first).take(m.count) {
+            let works = pieces.get(m.first..m.first + m.count).unwrap_or_default();
+            let floor = self.floor(works);
+            for work in works {
                 let seg = &work.piece.commanded;
                 if seg.dt_s > MAX_SAMPLES_PER_PIECE * period_s {
                     self.check_ends_only(seg, &mut out[slot].stats);
@@ -80,11 +118,45 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
                     scratch: &mut *scratch,
                     out: &mut *out,
                     slot,
+                    floor: floor.as_ref(),
                 };
                 sample_piece(work, self.response.as_ref(), period_s, &mut sink);
             }
         }
         self.flush(scratch, out);
+    }
+
+    /// For a sparse evaluation of a move with a long piece: lower bounds of the move's
+    /// peaks from its pieces' peak candidates ([`peak_candidates`]), each a sample of the
+    /// move. None when the move is sampled densely anyway.
+    fn floor(&self, works: &[PieceWork]) -> Option<Floor> {
+        let period_s = self.machine.sampling.period_s;
+        let r = self.response.as_ref().filter(|_| self.sparse)?;
+        if !works
+            .iter()
+            .any(|w| w.piece.commanded.dt_s >= SEED_MIN_PERIODS * period_s)
+        {
+            return None;
+        }
+        let mut floor = Floor::default();
+        // Only pieces that are sampled: a candidate must be one of the move's samples.
+        let sampled = works
+            .iter()
+            .filter(|w| w.piece.commanded.dt_s <= MAX_SAMPLES_PER_PIECE * period_s);
+        for w in sampled {
+            peak_candidates(w, r, period_s, |pos, vel, acc| {
+                if let Ok(s) = self.model.evaluate(pos, vel, acc) {
+                    for i in 0..3 {
+                        let available = self.machine.motors.available_force_n(s.dq_mm_s[i]);
+                        let f = &mut floor;
+                        f.force_n[i] = f.force_n[i].max(s.force_n[i].abs());
+                        f.share[i] = f.share[i].max(share(s.force_n[i], available));
+                        f.tension_n[i] = f.tension_n[i].max(s.arm_tension_n[i]);
+                    }
+                }
+            });
+        }
+        Some(floor)
     }
 
     /// A piece too long to sample: flagged, and its ends checked.
@@ -168,12 +240,23 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
     }
 }
 
+/// Lower bounds of a move's peaks, per tower: |Q_i| (N), the share of the available force,
+/// the arm tension (N).
+#[derive(Clone, Copy, Debug, Default)]
+struct Floor {
+    force_n: [f64; 3],
+    share: [f64; 3],
+    tension_n: [f64; 3],
+}
+
 /// The samples of the move whose result is `out[slot]`, on their way into the blocks.
 struct MoveSink<'a, 'm, O: Observer> {
     checker: &'a MoveChecker<'m, O>,
     scratch: &'a mut Scratch,
     out: &'a mut Vec<MoveResult<O::PerMove>>,
     slot: usize,
+    /// The move's peak candidates, when it is evaluated sparsely.
+    floor: Option<&'a Floor>,
 }
 
 impl<O: Observer> SampleSink for MoveSink<'_, '_, O> {
@@ -183,6 +266,46 @@ impl<O: Observer> SampleSink for MoveSink<'_, '_, O> {
         if self.scratch.len == BLOCK {
             self.checker.flush(self.scratch, self.out);
         }
+    }
+
+    fn sparse(&self) -> bool {
+        self.floor.is_some()
+    }
+
+    /// A run goes uncomputed when its bounds (`DeltaModel::bound`: every state of the box a
+    /// valid pose, |Q_i|, the share of the available force and the tension each with their
+    /// margin) are below what the move has already reached, strictly, on every tower: then
+    /// none of its samples could have changed a peak, where it was, or a problem, so the
+    /// statistics are the dense ones. What the move has reached: its samples so far (the
+    /// block flushed first) and its peak candidates.
+    fn skip(&mut self, states: &StateBox, count: u64) -> bool {
+        let (Some(floor), Some(b)) = (
+            self.floor,
+            self.checker
+                .model
+                .bound(&states.pos_mm, &states.vel_mm_s, &states.acc_mm_s2),
+        ) else {
+            return false;
+        };
+        if self.scratch.len > 0 {
+            self.checker.flush(self.scratch, self.out);
+        }
+        let Some(stats) = self.out.get_mut(self.slot).map(|r| &mut r.stats) else {
+            return false;
+        };
+        let motors = &self.checker.machine.motors;
+        let below = (0..3).all(|i| {
+            // The available force falls with the carriage speed: least at the bound.
+            let most_share = share(b.force_n[i], motors.available_force_n(b.speed_mm_s[i]));
+            b.force_n[i] < stats.peak_force_n[i].max(floor.force_n[i])
+                && most_share < stats.worst[i].ratio.max(floor.share[i])
+                && b.tension_n[i] < stats.peak_tension_n[i].max(floor.tension_n[i])
+        });
+        if below {
+            stats.samples += count;
+            self.checker.skipped.fetch_add(count, Ordering::Relaxed);
+        }
+        below
     }
 }
 

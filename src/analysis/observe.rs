@@ -61,6 +61,12 @@ pub trait Observer: Send + Sync {
 
     /// Appends what was kept of a later part of the same move.
     fn merge(&self, acc: &mut Self::PerMove, later: Self::PerMove);
+
+    /// Whether the observer needs every sample (a trace, a plot window): then none is left
+    /// uncomputed by a sparse evaluation, which only the verdict's peaks allow.
+    fn every_sample(&self) -> bool {
+        true
+    }
 }
 
 /// Observes nothing: a plain check.
@@ -73,6 +79,10 @@ impl Observer for () {
     fn observe(&self, _: &DeltaModel, _: &mut (), _: &Evaluated) {}
 
     fn merge(&self, _: &mut (), _: ()) {}
+
+    fn every_sample(&self) -> bool {
+        false
+    }
 }
 
 /// Two observers of the same runs.
@@ -91,6 +101,10 @@ impl<A: Observer, B: Observer> Observer for (A, B) {
     fn merge(&self, acc: &mut Self::PerMove, later: Self::PerMove) {
         self.0.merge(&mut acc.0, later.0);
         self.1.merge(&mut acc.1, later.1);
+    }
+
+    fn every_sample(&self) -> bool {
+        self.0.every_sample() || self.1.every_sample()
     }
 }
 
@@ -112,6 +126,10 @@ impl<A: Observer> Observer for Option<A> {
         if let (Some(a), Some(acc), Some(later)) = (self, acc, later) {
             a.merge(acc, later);
         }
+    }
+
+    fn every_sample(&self) -> bool {
+        self.as_ref().is_some_and(A::every_sample)
     }
 }
 

@@ -6,11 +6,13 @@
 //! dynamics works in SI inside. The carriages sit above the platform (the '+' root of
 //! eq. 6). The platform centre P is the nozzle plus (0, 0, PQ).
 
+mod bounds;
 mod dynamics;
 mod energy;
 mod kinematics;
 mod statics;
 
+pub use bounds::{BOUND_MARGIN, ForceBounds};
 pub use dynamics::{BLOCK, DynState, ForceBlock, StateBlock};
 pub use energy::energy_slope;
 

@@ -123,6 +123,34 @@ impl Response {
         }
     }
 
+    /// How far the lag rings from `tau_s` into a commanded piece of acceleration `a_c` on,
+    /// from `start` at its beginning: the free part u = e − e_p of [`Self::lag_at`] and its
+    /// rate are damped sinusoids e^(−στ)(C cos ω_dτ + D sin ω_dτ), so from `tau_s` on each
+    /// is at most e^(−σ·tau_s)·√(C² + D²) in magnitude, per axis; likewise ω²u + 2σu̇, by
+    /// which the actual acceleration differs from −ω²e_p = a_c.
+    pub fn ringing(&self, start: &Lag, a_c: Vec3, tau_s: f64) -> Ringing {
+        let e_p = a_c * (-1.0 / self.omega2);
+        let u0 = start.e - e_p;
+        let du0 = start.de;
+        let inv_wd = 1.0 / self.omega_d;
+        // u = e^(−στ)(c1 cos + d1 sin), u̇ = e^(−στ)(c2 cos + d2 sin) (see `lag_at`).
+        let (c1, d1) = (u0, (du0 + u0 * self.sigma) * inv_wd);
+        let (c2, d2) = (du0, -(du0 * self.sigma + u0 * self.omega2) * inv_wd);
+        let (c3, d3) = (
+            c1 * self.omega2 + c2 * (2.0 * self.sigma),
+            d1 * self.omega2 + d2 * (2.0 * self.sigma),
+        );
+        let decay = (-self.sigma * tau_s.max(0.0)).exp();
+        let amplitude = |c: Vec3, d: Vec3| c.zip_map(&d, |c, d| (c * c + d * d).sqrt() * decay);
+        Ringing {
+            e_p,
+            acc_p: e_p * (-self.omega2),
+            u: amplitude(c1, d1),
+            du: amplitude(c2, d2),
+            acc: amplitude(c3, d3),
+        }
+    }
+
     /// The actual acceleration of a lag: ẍ = −ω²e − 2ζω ė (mm/s²).
     #[inline(always)]
     pub fn acceleration(&self, lag: &Lag) -> Vec3 {
@@ -165,6 +193,19 @@ impl LagWalk {
         self.u = u * a + du * b;
         self.du = u * c + du * d;
     }
+}
+
+/// The lag's bounds from an instant of a piece on (see [`Response::ringing`]): per axis
+/// e ∈ e_p ± u, ė ∈ ±du, the actual acceleration ∈ acc_p ± acc.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ringing {
+    /// The lag the piece's acceleration settles to, −a_c/ω², mm.
+    pub e_p: Vec3,
+    /// The actual acceleration once settled, −ω²e_p, mm/s².
+    pub acc_p: Vec3,
+    pub u: Vec3,
+    pub du: Vec3,
+    pub acc: Vec3,
 }
 
 /// A commanded piece with the drive's lag at its start: the actual motion over the piece.
@@ -358,6 +399,50 @@ mod tests {
             let (ga, ea) = (r.acceleration(&got), r.acceleration(&exact));
             assert!((ga - ea).norm() < 1e-8, "{k}: {ga} {ea}");
             walk.advance();
+        }
+    }
+
+    #[test]
+    fn the_ringing_bounds_the_lag_at_every_later_instant() {
+        // Against the closed form and the walk, at and after each bound's instant; and the
+        // bound is reached within a period (not loose by more than the decay over it).
+        let r = Response::new(&Spring {
+            frequency_hz: 51.0,
+            damping_ratio: 0.1,
+        });
+        let start = Lag {
+            e: Vec3::new(0.02, -0.01, 0.003),
+            de: Vec3::new(-40.0, 25.0, 3.0),
+        };
+        let a_c = Vec3::new(3000.0, -700.0, 0.0);
+        let h = 1e-4;
+        for from in [0.0, 0.0031, 0.017, 0.2] {
+            let b = r.ringing(&start, a_c, from);
+            let mut walk = r.walk(&start, a_c, from, h);
+            let mut reached = [0.0f64; 3];
+            for k in 0..4000 {
+                let tau = from + k as f64 * h;
+                for lag in [r.lag_at(&start, a_c, tau), walk.lag()] {
+                    let u = lag.e - b.e_p;
+                    let dacc = r.acceleration(&lag) - b.acc_p;
+                    for i in 0..3 {
+                        let slack = |x: f64| 1e-12 * (1.0 + x);
+                        assert!(u[i].abs() <= b.u[i] + slack(b.u[i]), "{from} {k} u");
+                        assert!(lag.de[i].abs() <= b.du[i] + slack(b.du[i]), "{from} {k}");
+                        assert!(dacc[i].abs() <= b.acc[i] + slack(b.acc[i]), "{from} {k}");
+                        if tau < from + r.period_s() {
+                            reached[i] = reached[i].max(u[i].abs());
+                        }
+                    }
+                }
+                walk.advance();
+            }
+            let over_a_period = (r.sigma * r.period_s()).exp();
+            for (i, reached) in reached.iter().enumerate() {
+                assert!(reached * over_a_period >= b.u[i] * 0.999, "{from} {i}");
+            }
+            // Settled: the actual acceleration is the command's.
+            assert!((b.acc_p - a_c).norm() < 1e-9 * a_c.norm());
         }
     }
 

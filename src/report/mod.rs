@@ -11,7 +11,7 @@ mod text;
 pub use annotations::{annotations, summary_lines, verdict_line};
 pub use diagnostics::{DiagnosticKind, DiagnosticKinds, DiagnosticLog, KIND_LINES, severity_name};
 pub use github::write_github;
-pub use stats::{MoveStats, NEAR_SINGULAR_RATIO, Problem, RunForces, Worst};
+pub use stats::{MoveStats, NEAR_SINGULAR_RATIO, Problem, RunForces, Worst, share};
 pub use text::write_text;
 
 use serde::Serialize;

@@ -99,6 +99,14 @@ pub struct MoveStats {
 /// left stays a finite number (for JSON).
 const MIN_AVAILABLE_N: f64 = 1e-3;
 
+/// The share of what a motor can give that a force asks, |Q| / available (N, N): above 1
+/// the motor skips steps. No force available (a motor beyond its top speed) and some asked
+/// is a large finite share, a violation.
+#[inline(always)]
+pub fn share(force_n: f64, available_n: f64) -> f64 {
+    force_n.abs() / available_n.max(MIN_AVAILABLE_N)
+}
+
 /// The instant a tower's motor was asked the largest share of what it can give.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Worst {
@@ -185,9 +193,7 @@ impl MoveStats {
                 let up = q > peak;
                 peak = if up { q } else { peak };
                 peak_at = if up { j } else { peak_at };
-                // No force available (a motor beyond its top speed) and some asked: a large
-                // finite ratio, a violation.
-                let r = q / a.max(MIN_AVAILABLE_N);
+                let r = share(q, a);
                 let up = r > ratio;
                 ratio = if up { r } else { ratio };
                 ratio_at = if up { j } else { ratio_at };

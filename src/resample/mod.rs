@@ -8,14 +8,39 @@ mod piece;
 
 pub use crate::motion::Phase;
 pub use curve::{Curve, Frame, Lissajous, TaylorStep, taylor_step, walk_constant_speed};
-pub use piece::{JUMP_MIN_MM_S, Kicks, PieceWork, sample_piece};
+pub use piece::{JUMP_MIN_MM_S, Kicks, PieceWork, peak_candidates, sample_piece};
 
+use crate::interval::Interval;
 use crate::path::Vec3;
 
 /// Where the sampler's samples go, in time order. A closure taking a [`Sample`] is one;
 /// a type of its own can have its method inlined into the sampling loop.
 pub trait SampleSink {
     fn sample(&mut self, s: Sample);
+
+    /// Whether this sink wants to be asked [`Self::skip`] (a sparse evaluation).
+    #[inline(always)]
+    fn sparse(&self) -> bool {
+        false
+    }
+
+    /// Whether the sampler may leave `count` consecutive grid samples of a piece
+    /// uncomputed, every one of whose states lies in `states`; a sink that says yes has
+    /// counted them. Asked only of a sink that is [`Self::sparse`], in time order between
+    /// the samples.
+    #[inline(always)]
+    fn skip(&mut self, _states: &StateBox, _count: u64) -> bool {
+        false
+    }
+}
+
+/// A box holding the actual states of a run of samples: per coordinate, position (mm),
+/// velocity (mm/s) and acceleration (mm/s²) ranges.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StateBox {
+    pub pos_mm: [Interval; 3],
+    pub vel_mm_s: [Interval; 3],
+    pub acc_mm_s2: [Interval; 3],
 }
 
 impl<F: FnMut(Sample)> SampleSink for F {

@@ -4,8 +4,9 @@
 //! strictly inside it, and at its end (the left limit) when the state jumps there. The union
 //! over consecutive pieces has every grid point once.
 
-use super::{Phase, Sample, SampleSink};
-use crate::motion::drive::{ActualPiece, Response};
+use super::{Phase, Sample, SampleSink, StateBox};
+use crate::interval::Interval;
+use crate::motion::drive::{ActualPiece, LagWalk, Response};
 use crate::path::Vec3;
 
 /// A velocity jump smaller than this (mm/s) is rounding, not a junction: two collinear
@@ -145,24 +146,21 @@ pub fn sample_piece(
         Some(r) if (k as f64 * period_s) < t1 => {
             let t = k as f64 * period_s;
             let mut walk = r.walk(&work.piece.lag, seg.a, t - t0, period_s);
-            loop {
-                let t = k as f64 * period_s;
-                if t >= t1 {
-                    break;
-                }
-                let (p, v, _) = seg.at(t - t0);
-                let lag = walk.lag();
-                out.sample(Sample {
-                    t_s: t,
-                    line: seg.line,
-                    phase: phase(t, false),
-                    pos_mm: p + lag.e,
-                    vel_mm_s: v + lag.de,
-                    acc_mm_s2: r.acceleration(&lag),
-                    cmd_pos_mm: p,
-                });
-                walk.advance();
-                k += 1;
+            // Smallest k with k·Ts ≥ t1: the grid points inside are k..end.
+            let end = first_grid_index(t1, period_s);
+            let grid = Grid {
+                work,
+                response: r,
+                period_s,
+            };
+            if end - k >= SPARSE_MIN_PIECE && out.sparse() {
+                // The first drive period rings from the piece's start (a junction, an
+                // acceleration step): sampled, its bound would not pass.
+                let settled = (k + (r.period_s() / period_s) as i64).min(end);
+                grid.sample(&mut walk, k, settled, out);
+                grid.sparse(&mut walk, settled, end, out);
+            } else {
+                grid.sample(&mut walk, k, end, out);
             }
         }
         _ => loop {
@@ -176,6 +174,149 @@ pub fn sample_piece(
     }
     if work.end_sample && t1 > t0 {
         out.sample(state(t1, true));
+    }
+}
+
+/// A piece with fewer grid points inside than this is sampled whole: bounding it costs
+/// about what sampling it does.
+const SPARSE_MIN_PIECE: i64 = 64;
+
+/// The shortest run of grid points a sparse evaluation bounds: shorter ones are sampled.
+const SPARSE_MIN_RUN: i64 = 32;
+
+/// A state box is widened by this much, absolute (mm, mm/s, mm/s²), and relative to the
+/// box and the ringing: the rounding of the sampled states (the commanded polynomial, the
+/// lag's walk, τ = k·Ts − t0 at large t), far below anything physical.
+const STATE_SLACK: f64 = 1e-6;
+const STATE_SLACK_REL: f64 = 1e-9;
+
+/// The grid points inside a piece with a drive response, the lag walked from one to the
+/// next.
+struct Grid<'a> {
+    work: &'a PieceWork,
+    response: &'a Response,
+    period_s: f64,
+}
+
+impl Grid<'_> {
+    /// Samples grid points `k..end`, `walk` at `k`, and leaves `walk` at `end`.
+    #[inline(always)]
+    fn sample(&self, walk: &mut LagWalk, k: i64, end: i64, out: &mut impl SampleSink) {
+        let seg = &self.work.piece.commanded;
+        for k in k..end {
+            let t = k as f64 * self.period_s;
+            let (p, v, _) = seg.at(t - seg.t0_s);
+            let lag = walk.lag();
+            out.sample(Sample {
+                t_s: t,
+                line: seg.line,
+                phase: if t < self.work.corner_until_s {
+                    Phase::Corner
+                } else {
+                    seg.phase
+                },
+                pos_mm: p + lag.e,
+                vel_mm_s: v + lag.de,
+                acc_mm_s2: self.response.acceleration(&lag),
+                cmd_pos_mm: p,
+            });
+            walk.advance();
+        }
+    }
+
+    /// Grid points `k..end` in time order, sparsely: a run whose state box the sink lets go
+    /// ([`SampleSink::skip`]) is stepped over (the walk still steps through it, so the
+    /// samples after it are the ones dense sampling computes, bit for bit); a run it keeps
+    /// is halved and each half tried again, down to [`SPARSE_MIN_RUN`], then sampled.
+    fn sparse(&self, walk: &mut LagWalk, k: i64, end: i64, out: &mut impl SampleSink) {
+        let n = end - k;
+        if n >= SPARSE_MIN_RUN {
+            if out.skip(&self.states(k, end - 1), n as u64) {
+                for _ in 0..n {
+                    walk.advance();
+                }
+                return;
+            }
+            if n >= 2 * SPARSE_MIN_RUN {
+                let mid = k + n / 2;
+                self.sparse(walk, k, mid, out);
+                self.sparse(walk, mid, end, out);
+                return;
+            }
+        }
+        self.sample(walk, k, end, out);
+    }
+
+    /// A box holding the actual state at grid points `first..=last`: the commanded
+    /// polynomial's range over [τ_first, τ_last] (its ends and, for the position, its vertex)
+    /// plus the lag's ringing from τ_first on ([`Response::ringing`]).
+    pub(super) fn states(&self, first: i64, last: i64) -> StateBox {
+        let seg = &self.work.piece.commanded;
+        let tau = |k: i64| k as f64 * self.period_s - seg.t0_s;
+        let (ta, tb) = (tau(first), tau(last));
+        let ring = self.response.ringing(&self.work.piece.lag, seg.a, ta);
+        let ((pa, va, _), (pb, vb, _)) = (seg.at(ta), seg.at(tb));
+        let mut b = StateBox {
+            pos_mm: [Interval::point(0.0); 3],
+            vel_mm_s: [Interval::point(0.0); 3],
+            acc_mm_s2: [Interval::point(0.0); 3],
+        };
+        let slack =
+            |x: Interval, ring: f64| x.widen(STATE_SLACK + STATE_SLACK_REL * (x.mag() + ring));
+        for i in 0..3 {
+            let mut pos = Interval::hull(pa[i], pb[i]);
+            // The parabola's vertex, where the velocity changes sign inside the run.
+            if seg.a[i] != 0.0 {
+                let tv = -seg.v[i] / seg.a[i];
+                if tv > ta && tv < tb {
+                    let pv = seg.p[i] + seg.v[i] * tv + seg.a[i] * (0.5 * tv * tv);
+                    pos = Interval::hull(pos.lo.min(pv), pos.hi.max(pv));
+                }
+            }
+            b.pos_mm[i] = slack(pos + ring.e_p[i], ring.u[i]).widen(ring.u[i]);
+            b.vel_mm_s[i] = slack(Interval::hull(va[i], vb[i]), ring.du[i]).widen(ring.du[i]);
+            b.acc_mm_s2[i] = slack(Interval::around(ring.acc_p[i], ring.acc[i]), ring.acc[i]);
+        }
+        b
+    }
+}
+
+/// The actual states at a few of the samples of `work` where a move's peaks tend to be
+/// (its start, the grid points about half a drive period and a period after it, where the
+/// ringing of a junction or an acceleration step overshoots, and its last grid point), as
+/// dense sampling computes them up to rounding: samples of the move, so lower bounds of its
+/// peaks, for a sparse evaluation to compare its bounds with. `out` gets (position,
+/// velocity, acceleration).
+pub fn peak_candidates(
+    work: &PieceWork,
+    response: &Response,
+    period_s: f64,
+    mut out: impl FnMut(Vec3, Vec3, Vec3),
+) {
+    let seg = &work.piece.commanded;
+    let (t0, t1) = (seg.t0_s, seg.t1_s());
+    let lag = &work.piece.lag;
+    out(seg.p + lag.e, seg.v + lag.de, response.acceleration(lag));
+    if !(period_s > 0.0 && period_s.is_finite()) {
+        return;
+    }
+    let mut first = first_grid_index(t0, period_s);
+    if first as f64 * period_s <= t0 {
+        first += 1;
+    }
+    let end = first_grid_index(t1, period_s);
+    let p = response.period_s();
+    let mut last_k = None;
+    for t in [t0 + 0.5 * p, t0 + p, t1] {
+        let k = first_grid_index(t, period_s).min(end - 1).max(first);
+        if k >= end || last_k == Some(k) {
+            continue;
+        }
+        last_k = Some(k);
+        let tau = k as f64 * period_s - t0;
+        let (pc, vc, _) = seg.at(tau);
+        let lag = response.lag_at(lag, seg.a, tau);
+        out(pc + lag.e, vc + lag.de, response.acceleration(&lag));
     }
 }
 
@@ -201,6 +342,7 @@ mod tests {
     use super::*;
     use crate::motion::Segment;
     use crate::motion::drive::{Drive, DriveStage, Lag, Spring};
+    use crate::resample::StateBox;
 
     const TS: f64 = 0.001;
 
@@ -359,5 +501,123 @@ mod tests {
             let corner = s.t_s < 0.5 / 45.0;
             assert_eq!(s.phase == Phase::Corner, corner, "{}", s.t_s);
         }
+    }
+
+    /// A ringing piece: long enough for a sparse evaluation, starting with a lag that rings.
+    fn ringing_piece() -> (PieceWork, Response) {
+        let spring = Spring {
+            frequency_hz: 51.0,
+            damping_ratio: 0.1,
+        };
+        let r = Response::new(&spring).with_step(TS);
+        let s = seg(
+            12.3456,
+            0.2834,
+            Vec3::new(10.0, -20.0, 5.0),
+            Vec3::new(80.0, -30.0, 2.0),
+            Vec3::new(-600.0, 200.0, 0.0),
+        );
+        let w = PieceWork {
+            piece: ActualPiece {
+                commanded: s,
+                lag: Lag {
+                    e: Vec3::new(0.02, -0.01, 0.0),
+                    de: Vec3::new(-4.0, 2.5, 0.3),
+                },
+                jump: Vec3::zeros(),
+            },
+            kicks: Kicks::default(),
+            end_sample: false,
+            corner_until_s: 12.35,
+        };
+        (w, r)
+    }
+
+    /// A sink that skips the runs `skip` says to, recording what it was asked.
+    struct Sparse<F> {
+        samples: Vec<Sample>,
+        asked: Vec<(StateBox, u64)>,
+        skip: F,
+    }
+
+    impl<F: FnMut(&StateBox) -> bool> SampleSink for Sparse<F> {
+        fn sample(&mut self, s: Sample) {
+            self.samples.push(s);
+        }
+        fn sparse(&self) -> bool {
+            true
+        }
+        fn skip(&mut self, b: &StateBox, count: u64) -> bool {
+            self.asked.push((*b, count));
+            (self.skip)(b)
+        }
+    }
+
+    #[test]
+    fn every_sample_of_a_run_lies_in_its_box_and_skipped_runs_leave_the_rest_bit_for_bit() {
+        let (w, r) = ringing_piece();
+        let dense = samples(&w, Some(&r));
+        assert!(dense.len() > 250);
+        // Skip every other run asked about, from the second.
+        let mut flip = true;
+        let mut sink = Sparse {
+            samples: Vec::new(),
+            asked: Vec::new(),
+            skip: |_: &StateBox| {
+                flip = !flip;
+                flip
+            },
+        };
+        sample_piece(&w, Some(&r), TS, &mut sink);
+        let Sparse { samples, asked, .. } = sink;
+        assert!(asked.len() >= 3, "{}", asked.len());
+        let skipped: u64 = asked.iter().skip(1).step_by(2).map(|a| a.1).sum();
+        assert!(skipped > 0);
+        assert_eq!(samples.len() as u64 + skipped, dense.len() as u64);
+        // The samples kept are dense ones, bit for bit (the walk steps over skipped runs).
+        let mut d = dense.iter();
+        for s in &samples {
+            assert!(d.any(|x| x == s), "{s:?}");
+        }
+        // Every run's box holds the dense samples of the run: runs from each grid point,
+        // of every length.
+        let grid = Grid {
+            work: &w,
+            response: &r,
+            period_s: TS,
+        };
+        let k0 = first_grid_index(w.piece.commanded.t0_s, TS);
+        let contains = |i: Interval, x: f64| i.lo <= x && x <= i.hi;
+        for from in (1..dense.len()).step_by(7) {
+            for len in [1, 2, 5, 17, 64, 200] {
+                let to = (from + len).min(dense.len());
+                let b = grid.states(k0 + from as i64 - 1, k0 + to as i64 - 2);
+                for s in &dense[from..to] {
+                    for k in 0..3 {
+                        assert!(contains(b.pos_mm[k], s.pos_mm[k]), "{k} {s:?} {b:?}");
+                        assert!(contains(b.vel_mm_s[k], s.vel_mm_s[k]), "{k} {s:?} {b:?}");
+                        assert!(contains(b.acc_mm_s2[k], s.acc_mm_s2[k]), "{k} {s:?} {b:?}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_peak_candidates_are_samples() {
+        let (w, r) = ringing_piece();
+        let dense = samples(&w, Some(&r));
+        let mut n = 0;
+        peak_candidates(&w, &r, TS, |p, v, a| {
+            n += 1;
+            let close = |x: Vec3, y: Vec3| (x - y).norm() <= 1e-9 * (1.0 + y.norm());
+            assert!(
+                dense
+                    .iter()
+                    .any(|s| close(s.pos_mm, p) && close(s.vel_mm_s, v) && close(s.acc_mm_s2, a)),
+                "{p} {v} {a}"
+            );
+        });
+        assert_eq!(n, 4);
     }
 }

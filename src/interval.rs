@@ -1,0 +1,210 @@
+//! Interval arithmetic: ranges [lo, hi] that contain every value a quantity takes over a
+//! set of inputs. The sparse evaluation (docs/performance.md) bounds the model's outputs
+//! over a run of samples with it. Endpoints are rounded to nearest, not outwards: a user of
+//! a bound widens it by a margin far above the rounding (see `delta::bounds`).
+
+use std::ops::{Add, Mul, Neg, Sub};
+
+/// The closed range [lo, hi] (lo ≤ hi unless a NaN went in).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Interval {
+    pub lo: f64,
+    pub hi: f64,
+}
+
+impl Interval {
+    /// The range of the two values, in either order.
+    #[inline(always)]
+    pub fn hull(a: f64, b: f64) -> Interval {
+        Interval {
+            lo: a.min(b),
+            hi: a.max(b),
+        }
+    }
+
+    /// The single value `x`.
+    #[inline(always)]
+    pub fn point(x: f64) -> Interval {
+        Interval { lo: x, hi: x }
+    }
+
+    /// `x` ± `r` (r ≥ 0).
+    #[inline(always)]
+    pub fn around(x: f64, r: f64) -> Interval {
+        Interval {
+            lo: x - r,
+            hi: x + r,
+        }
+    }
+
+    /// The range widened by `r` on each side.
+    #[inline(always)]
+    pub fn widen(self, r: f64) -> Interval {
+        Interval {
+            lo: self.lo - r,
+            hi: self.hi + r,
+        }
+    }
+
+    /// The largest magnitude in the range.
+    #[inline(always)]
+    pub fn mag(self) -> f64 {
+        self.lo.abs().max(self.hi.abs())
+    }
+
+    /// The range of x² (tighter than x·x when the range holds zero).
+    #[inline(always)]
+    pub fn sqr(self) -> Interval {
+        let (a, b) = (self.lo * self.lo, self.hi * self.hi);
+        if self.lo <= 0.0 && self.hi >= 0.0 {
+            Interval {
+                lo: 0.0,
+                hi: a.max(b),
+            }
+        } else {
+            Interval::hull(a, b)
+        }
+    }
+
+    /// The range of √x, for a range of non-negative values.
+    #[inline(always)]
+    pub fn sqrt(self) -> Interval {
+        Interval {
+            lo: self.lo.max(0.0).sqrt(),
+            hi: self.hi.sqrt(),
+        }
+    }
+
+    /// The range of 1/x, or None when the range holds zero.
+    #[inline(always)]
+    pub fn recip(self) -> Option<Interval> {
+        (self.lo > 0.0 || self.hi < 0.0).then(|| Interval::hull(1.0 / self.lo, 1.0 / self.hi))
+    }
+
+    /// Whether both ends are finite.
+    #[inline(always)]
+    pub fn is_finite(self) -> bool {
+        self.lo.is_finite() && self.hi.is_finite()
+    }
+}
+
+impl Add for Interval {
+    type Output = Interval;
+    #[inline(always)]
+    fn add(self, o: Interval) -> Interval {
+        Interval {
+            lo: self.lo + o.lo,
+            hi: self.hi + o.hi,
+        }
+    }
+}
+
+impl Sub for Interval {
+    type Output = Interval;
+    #[inline(always)]
+    fn sub(self, o: Interval) -> Interval {
+        Interval {
+            lo: self.lo - o.hi,
+            hi: self.hi - o.lo,
+        }
+    }
+}
+
+impl Neg for Interval {
+    type Output = Interval;
+    #[inline(always)]
+    fn neg(self) -> Interval {
+        Interval {
+            lo: -self.hi,
+            hi: -self.lo,
+        }
+    }
+}
+
+impl Mul for Interval {
+    type Output = Interval;
+    #[inline(always)]
+    fn mul(self, o: Interval) -> Interval {
+        let (a, b, c, d) = (
+            self.lo * o.lo,
+            self.lo * o.hi,
+            self.hi * o.lo,
+            self.hi * o.hi,
+        );
+        Interval {
+            lo: a.min(b).min(c.min(d)),
+            hi: a.max(b).max(c.max(d)),
+        }
+    }
+}
+
+impl Mul<f64> for Interval {
+    type Output = Interval;
+    #[inline(always)]
+    fn mul(self, k: f64) -> Interval {
+        Interval::hull(self.lo * k, self.hi * k)
+    }
+}
+
+impl Add<f64> for Interval {
+    type Output = Interval;
+    #[inline(always)]
+    fn add(self, k: f64) -> Interval {
+        Interval {
+            lo: self.lo + k,
+            hi: self.hi + k,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn range() -> impl Strategy<Value = (Interval, f64)> {
+        // An interval and a point in it (t ∈ [0, 1] along it).
+        (-1e3..1e3f64, 0.0..1e3f64, 0.0..=1.0f64)
+            .prop_map(|(lo, w, t)| (Interval { lo, hi: lo + w }, lo + t * w))
+    }
+
+    fn holds(i: Interval, x: f64) -> bool {
+        // Round to nearest: an endpoint may be one rounding off the exact one.
+        let slack = 1e-12 * (1.0 + x.abs());
+        i.lo - slack <= x && x <= i.hi + slack
+    }
+
+    proptest! {
+        #[test]
+        fn every_operation_contains_its_value_at_any_point((a, x) in range(), (b, y) in range()) {
+            prop_assert!(holds(a + b, x + y));
+            prop_assert!(holds(a - b, x - y));
+            prop_assert!(holds(-a, -x));
+            prop_assert!(holds(a * b, x * y));
+            prop_assert!(holds(a * 3.5, x * 3.5));
+            prop_assert!(holds(a * -2.0, x * -2.0));
+            prop_assert!(holds(a + 7.0, x + 7.0));
+            prop_assert!(holds(a.sqr(), x * x));
+            prop_assert!(holds(a.widen(0.5), x));
+            prop_assert!(a.mag() >= x.abs());
+            if x >= 0.0 {
+                let p = Interval { lo: a.lo.max(0.0), hi: a.hi };
+                prop_assert!(holds(p.sqrt(), x.sqrt()));
+            }
+            match a.recip() {
+                Some(r) => prop_assert!(holds(r, 1.0 / x)),
+                None => prop_assert!(a.lo <= 0.0 && a.hi >= 0.0),
+            }
+        }
+    }
+
+    #[test]
+    fn a_square_around_zero_starts_at_zero() {
+        let i = Interval { lo: -2.0, hi: 3.0 };
+        assert_eq!(i.sqr(), Interval { lo: 0.0, hi: 9.0 });
+        assert_eq!((i * i).lo, -6.0);
+        assert_eq!(Interval::hull(4.0, -1.0), Interval { lo: -1.0, hi: 4.0 });
+        assert_eq!(Interval::around(1.0, 0.5).mag(), 1.5);
+        assert_eq!(Interval::point(2.0).recip(), Some(Interval::point(0.5)));
+    }
+}
