@@ -152,6 +152,7 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
                         f.force_n[i] = f.force_n[i].max(s.force_n[i].abs());
                         f.share[i] = f.share[i].max(share(s.force_n[i], available));
                         f.tension_n[i] = f.tension_n[i].max(s.arm_tension_n[i]);
+                        f.speed_mm_s = f.speed_mm_s.max(s.dq_mm_s[i].abs());
                     }
                 }
             });
@@ -247,6 +248,8 @@ struct Floor {
     force_n: [f64; 3],
     share: [f64; 3],
     tension_n: [f64; 3],
+    /// The fastest carriage, |q̇_i| mm/s (`MoveStats::peak_speed_mm_s`).
+    speed_mm_s: f64,
 }
 
 /// The samples of the move whose result is `out[slot]`, on their way into the blocks.
@@ -273,8 +276,8 @@ impl<O: Observer> SampleSink for MoveSink<'_, '_, O> {
     }
 
     /// A run goes uncomputed when its bounds (`DeltaModel::bound`: every state of the box a
-    /// valid pose, |Q_i|, the share of the available force and the tension each with their
-    /// margin) are below what the move has already reached, strictly, on every tower: then
+    /// valid pose, |Q_i|, the share of the available force, the tension and the carriage
+    /// speed each with their margin) are below what the move has already reached, strictly, on every tower: then
     /// none of its samples could have changed a peak, where it was, or a problem, so the
     /// statistics are the dense ones. What the move has reached: its samples so far (the
     /// block flushed first) and its peak candidates.
@@ -300,6 +303,7 @@ impl<O: Observer> SampleSink for MoveSink<'_, '_, O> {
             b.force_n[i] < stats.peak_force_n[i].max(floor.force_n[i])
                 && most_share < stats.worst[i].ratio.max(floor.share[i])
                 && b.tension_n[i] < stats.peak_tension_n[i].max(floor.tension_n[i])
+                && b.speed_mm_s[i] < stats.peak_speed_mm_s.max(floor.speed_mm_s)
         });
         if below {
             stats.samples += count;
