@@ -80,6 +80,45 @@ fn a_file_for_another_flavour_gets_one_warning() {
 /// The commanded carriage heights lie on the straight tower-space line between whole
 /// steps: at a Z-only move's samples all three carriages move together, and where a block
 /// ends the heights are whole steps (80 steps/mm) above or below home.
+/// An M665 that states another geometry than the profile's is told, once per parameter
+/// that differs; one that states the profile's (or only S, or H) is not.
+#[test]
+fn an_m665_with_another_geometry_is_told() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("m665.gcode");
+    let profile = delta_gcode::machine::Machine::load(&repo(MARLIN)).unwrap();
+    let g = &profile.geometry;
+    let same = format!(
+        "M665 L{} R{} H123 X{} S100\n",
+        g.arm_length_mm[0],
+        g.delta_radius_mm,
+        g.tower_angles_deg[0] - 210.0
+    );
+    let other = "M665 L300 R90.5 Y0.25 A0.5\n";
+    std::fs::write(
+        &p,
+        format!("G28\n{same}G28\n{other}G28\nG1 X10 Y5 Z10 F3000\n"),
+    )
+    .unwrap();
+    let m = messages(&check_json(&p.display().to_string(), MARLIN));
+    let about = |letter: &str| {
+        m.iter()
+            .filter(|m| m.contains(&format!("M665 {letter}:")))
+            .count()
+    };
+    assert_eq!((about("L"), about("R"), about("Y")), (1, 1, 1), "{m:?}");
+    assert_eq!(
+        m.iter()
+            .filter(|m| m.contains("M665 ") && m.contains("profile's geometry"))
+            .count(),
+        3,
+        "{m:?}"
+    );
+    let rods = m.iter().find(|m| m.contains("M665 L:")).unwrap();
+    assert!(rods.contains("300.500, 300.000, 300.000"), "{rods}");
+    assert!(m.iter().any(|m| m.contains("\"line\":4")), "{m:?}");
+}
+
 #[test]
 fn the_trace_commands_marlins_steps() {
     let dir = tempfile::tempdir().unwrap();

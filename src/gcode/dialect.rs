@@ -33,6 +33,20 @@ pub struct SoftEndstops {
     pub max_z_mm: f64,
 }
 
+/// The profile's delta geometry in M665's terms (gcode/calibrate/M665.cpp), for telling the
+/// user when the file's M665 says otherwise: the model keeps the profile's.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DeltaSettings {
+    /// Each tower's rod, mm: Marlin's `delta_diagonal_rod` (L) plus that tower's
+    /// `delta_diagonal_rod_trim` (A, B, C).
+    pub rod_mm: [f64; 3],
+    /// `delta_radius` (R), mm.
+    pub radius_mm: f64,
+    /// `delta_tower_angle_trim` (X, Y, Z): each tower's angle less its ideal 210°, 330°,
+    /// 90°, degrees.
+    pub angle_trim_deg: [f64; 3],
+}
+
 /// How the interpreter reads the G-code.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Dialect {
@@ -41,6 +55,8 @@ pub struct Dialect {
     pub arcs: ArcRules,
     /// Marlin's soft endstops (None: Klipper, which refuses such moves instead).
     pub soft_endstops: Option<SoftEndstops>,
+    /// The profile's geometry, to compare M665 with (None: not known, no comparison).
+    pub delta: Option<DeltaSettings>,
 }
 
 impl Dialect {
@@ -50,6 +66,7 @@ impl Dialect {
             firmware: FirmwareKind::Klipper,
             arcs,
             soft_endstops: None,
+            delta: None,
         }
     }
 }
@@ -70,6 +87,7 @@ impl From<ArcRules> for Dialect {
                 firmware: FirmwareKind::Marlin,
                 arcs,
                 soft_endstops: None,
+                delta: None,
             },
         }
     }

@@ -4,7 +4,7 @@
 
 use super::interp::Diags;
 use super::parse::ParsedLine;
-use super::{DeltaChange, Diagnostic, MarlinChange};
+use super::{DeltaChange, DeltaSettings, Diagnostic, MarlinChange};
 
 /// The value of `letter` when given and accepted by `ok` (`what` says what is expected); an
 /// error otherwise, and the setting is kept.
@@ -126,10 +126,12 @@ pub(super) fn m205(
     })
 }
 
-/// M665 S L R H X Y Z A B C.
+/// M665 S L R H X Y Z A B C. With the profile's geometry, a warning for each part of it
+/// the line sets otherwise: delta-gcode keeps modelling the profile's.
 pub(super) fn m665(
     p: &ParsedLine,
     unit: f64,
+    profile: Option<&DeltaSettings>,
     d: &mut Diags<impl FnMut(Diagnostic)>,
 ) -> DeltaChange {
     let number = |letter: u8, d: &mut Diags<_>| -> Option<f64> {
@@ -145,12 +147,79 @@ pub(super) fn m665(
             }
         }
     };
-    DeltaChange {
+    let change = DeltaChange {
         segments_per_second: positive(p, "M665", b'S', 1.0, d),
         diagonal_rod_mm: positive(p, "M665", b'L', unit, d),
         radius_mm: positive(p, "M665", b'R', unit, d),
         height_mm: positive(p, "M665", b'H', unit, d),
         angle_trim_deg: [b'X', b'Y', b'Z'].map(|a| number(a, d)),
         rod_trim_mm: [b'A', b'B', b'C'].map(|a| number(a, d).map(|v| v * unit)),
+    };
+    if let Some(profile) = profile {
+        for (letter, what) in differences(&change, profile) {
+            let column = p.word(letter).map_or(1, |w| w.column);
+            d.warn(
+                column,
+                format!(
+                    "M665 {}: {what}; delta-gcode plans and models the profile's geometry \
+                     (set the profile's geometry to the printer's calibration)",
+                    char::from(letter)
+                ),
+            );
+        }
     }
+    change
+}
+
+/// Below this a calibration value is the profile's, mm or degrees (M665 prints 3 decimals).
+const SAME_GEOMETRY: f64 = 0.0005;
+
+/// Each parameter of an M665 that states another geometry than the profile's: its letter
+/// and what differs. The rods are L plus the line's trims (0 where it gives none, Marlin's
+/// default `DELTA_DIAGONAL_ROD_TRIM_TOWER`); trims without L are not compared. H is not
+/// compared: the home height it gives is `delta_height` less the probe's Z offset
+/// (`set_axis_is_at_home`), which the profile does not state apart.
+fn differences(c: &DeltaChange, profile: &DeltaSettings) -> Vec<(u8, String)> {
+    let differs = |a: f64, b: f64| (a - b).abs() > SAME_GEOMETRY;
+    let list = |v: &[f64; 3]| v.map(|x| format!("{x:.3}")).join(", ");
+    let mut out = Vec::new();
+    if let Some(l) = c.diagonal_rod_mm {
+        let rods: [f64; 3] = std::array::from_fn(|i| l + c.rod_trim_mm[i].unwrap_or(0.0));
+        if (0..3).any(|i| differs(rods[i], profile.rod_mm[i])) {
+            out.push((
+                b'L',
+                format!(
+                    "the file's diagonal rods (L plus trims A, B, C) are {} mm, the profile's \
+                     geometry.arm_length_mm {} mm",
+                    list(&rods),
+                    list(&profile.rod_mm)
+                ),
+            ));
+        }
+    }
+    if let Some(r) = c.radius_mm.filter(|&r| differs(r, profile.radius_mm)) {
+        out.push((
+            b'R',
+            format!(
+                "the file's delta radius is {r:.3} mm, the profile's geometry.delta_radius_mm \
+                 {:.3} mm",
+                profile.radius_mm
+            ),
+        ));
+    }
+    let trims = c.angle_trim_deg;
+    if (0..3).any(|i| trims[i].is_some_and(|t| differs(t, profile.angle_trim_deg[i]))) {
+        let file = std::array::from_fn(|i| trims[i].unwrap_or(profile.angle_trim_deg[i]));
+        let letter = [b'X', b'Y', b'Z'][(0..3).find(|&i| trims[i].is_some()).unwrap_or(0)];
+        out.push((
+            letter,
+            format!(
+                "the file's tower angle trims are {}°, the profile's geometry.tower_angles_deg \
+                 less 210°, 330°, 90° are {}°",
+                list(&file),
+                list(&profile.angle_trim_deg)
+            ),
+        ));
+    }
+    out
 }

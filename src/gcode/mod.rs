@@ -13,7 +13,7 @@ pub mod sniff;
 use std::io::Read;
 
 pub use arc::{ArcRules, Plane};
-pub use dialect::{Dialect, FirmwareKind, SoftEndstops};
+pub use dialect::{DeltaSettings, Dialect, FirmwareKind, SoftEndstops};
 pub use event::{
     ArcChord, DeltaChange, Diagnostic, Event, LimitChange, MarlinChange, Move, Severity,
 };

@@ -24,7 +24,7 @@ mod tests;
 mod tests_keys;
 mod validate;
 
-use crate::gcode::{ArcRules, Dialect, FirmwareKind, SoftEndstops};
+use crate::gcode::{ArcRules, DeltaSettings, Dialect, FirmwareKind, SoftEndstops};
 use crate::motion::drive::Drive;
 use crate::motion::shaper::InputShaper;
 use std::path::Path;
@@ -259,7 +259,20 @@ impl Machine {
                     radius_mm: self.geometry.print_radius_mm,
                     max_z_mm: self.geometry.home_z_mm,
                 }),
+                delta: Some(self.delta_settings()),
             },
+        }
+    }
+
+    /// The geometry as Marlin's M665 states it: L + trim per tower, R, angle trims.
+    fn delta_settings(&self) -> DeltaSettings {
+        let g = &self.geometry;
+        DeltaSettings {
+            rod_mm: g.arm_length_mm,
+            radius_mm: g.delta_radius_mm,
+            angle_trim_deg: std::array::from_fn(|i| {
+                g.tower_angles_deg[i] - defaults::TOWER_ANGLES_DEG[i]
+            }),
         }
     }
 

@@ -77,14 +77,19 @@ impl Lookahead {
                 .min(next_entry + 2.0 * b.accel_mm_s2 * b.millimeters);
             next_entry = b.entry_sqr;
         }
-        for k in first.max(1)..q.len() {
-            let p = q[k - 1];
-            if p.entry_sqr < q[k].entry_sqr {
+        let (front, back) = q.as_mut_slices();
+        let mut prev: Option<&Block> = None;
+        for (k, b) in front.iter_mut().chain(back.iter_mut()).enumerate() {
+            if k >= first.max(1)
+                && let Some(p) = prev
+                && p.entry_sqr < b.entry_sqr
+            {
                 let reach = p.entry_sqr + 2.0 * p.accel_mm_s2 * p.millimeters;
-                if reach < q[k].entry_sqr {
-                    q[k].entry_sqr = reach;
+                if reach < b.entry_sqr {
+                    b.entry_sqr = reach;
                 }
             }
+            prev = Some(b);
         }
     }
 

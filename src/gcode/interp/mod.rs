@@ -380,7 +380,7 @@ impl Interpreter {
                 self.marlin_change(change, ev);
             }
             (b'M', 665) if marlin => {
-                let change = marlin::m665(p, self.unit_mm, d);
+                let change = marlin::m665(p, self.unit_mm, self.dialect.delta.as_ref(), d);
                 self.marlin_change(Some(MarlinChange::Delta(change)), ev);
                 if self.homed {
                     self.homed = false;

@@ -1,0 +1,361 @@
+//! Klipper's input shaper: the commanded X and Y of the nozzle are weighted sums of the
+//! planned X and Y at a few time offsets (klippy/chelper/kin_shaper.c), with the shapers of
+//! klippy/extras/shaper_defs.py. Z is not shaped.
+//!
+//! The planned motion is a chain of quadratics in time, and so is every shifted copy of it:
+//! the commanded motion is again a chain of quadratics, whose breaks are the planned breaks
+//! shifted by each pulse's offset. [`Shaper`] computes it as a stream.
+
+mod pulses;
+mod window;
+
+pub use pulses::{
+    AxisShaper, DEFAULT_SHAPER_DAMPING_RATIO, InputShaper, Pulses, ShaperChange, ShaperType,
+};
+
+use super::{CONTINUITY_MM, Segment};
+use crate::path::Vec3;
+use window::Window;
+
+/// The commanded motion of a planned one, as a stream: planned pieces in, commanded pieces
+/// out as soon as no later planned piece can change them. The motion before the first and
+/// after the last planned piece is a rest where they start and end (Klipper's trapq).
+pub struct Shaper {
+    axes: [Pulses; 2],
+    /// The smallest and largest offset of any pulse.
+    tau_lo: f64,
+    tau_hi: f64,
+    /// Planned pieces still needed (the last one's end is known).
+    planned: Window,
+    /// Each pulse's lookup slot in `planned` (0 is the planned motion itself): X's pulses,
+    /// then Y's (Y's are X's when both axes have the same shaper).
+    slots: [[usize; pulses::MAX_PULSES]; 2],
+    /// The slots `next_break` asks: 0 and the pulses of each distinct shaper.
+    break_slots: usize,
+    /// Each slot's offset, s.
+    offsets: [f64; window::MAX_OFFSETS],
+    /// Commanded motion is out up to here.
+    t_out: f64,
+    /// No piece has come since the start or the last re-homing.
+    fresh: bool,
+    /// A new configuration, for the pieces after the next one.
+    pending: Option<InputShaper>,
+}
+
+impl Shaper {
+    pub fn new(shaper: &InputShaper) -> Shaper {
+        let axes = [Pulses::of(shaper.x), Pulses::of(shaper.y)];
+        let tau_lo = axes[0].span_s().0.min(axes[1].span_s().0);
+        let tau_hi = axes[0].span_s().1.max(axes[1].span_s().1);
+        let mut slots = [[0; pulses::MAX_PULSES]; 2];
+        let mut offsets = [0.0; window::MAX_OFFSETS];
+        let mut break_slots = 1;
+        for axis in 0..2 {
+            if axis == 1 && axes[0] == axes[1] {
+                slots[1] = slots[0];
+                break;
+            }
+            for (i, (_, tau)) in axes[axis].iter().enumerate() {
+                slots[axis][i] = break_slots;
+                offsets[break_slots] = tau;
+                break_slots += 1;
+            }
+        }
+        Shaper {
+            axes,
+            tau_lo,
+            tau_hi,
+            planned: Window::default(),
+            slots,
+            break_slots,
+            offsets,
+            t_out: f64::NEG_INFINITY,
+            fresh: true,
+            pending: None,
+        }
+    }
+
+    /// Shapes the pieces from the next one on with `shaper` (SET_INPUT_SHAPER; the toolhead
+    /// is at rest). The motion so far ends as the old shaper has it, until the new one
+    /// starts.
+    pub fn reconfigure(&mut self, shaper: &InputShaper) {
+        self.pending = Some(*shaper);
+    }
+
+    /// Whether the commanded motion is the planned one.
+    pub fn is_identity(&self) -> bool {
+        self.axes == [Pulses::IDENTITY; 2]
+    }
+
+    /// Takes the next planned piece; hands on the commanded pieces now final. A piece that
+    /// does not start where the last ended (a re-homing) ends the motion so far first.
+    pub fn push(&mut self, seg: Segment, out: &mut impl FnMut(Segment)) {
+        if let Some(new) = self.pending.take() {
+            let next = Shaper::new(&new);
+            self.finish_until(seg.t0_s - next.tau_hi, out);
+            *self = next;
+        }
+        if self.is_identity() {
+            out(seg);
+            return;
+        }
+        if let Some(last) = self.planned.back() {
+            let (p_end, _) = last.end();
+            if (seg.p - p_end).norm() > CONTINUITY_MM {
+                self.finish_until(seg.t0_s, out);
+            }
+        }
+        if self.fresh {
+            // The motion shaped from a rest starts when the last pulse first sees it.
+            self.t_out = seg.t0_s - self.tau_hi;
+            self.fresh = false;
+        }
+        let known_s = seg.t1_s();
+        self.planned.push(seg);
+        self.emit_until(known_s - self.tau_hi, out);
+    }
+
+    /// The end of the planned motion: hands on the rest of the commanded motion, until the
+    /// first pulse has seen the final rest.
+    pub fn finish(&mut self, out: &mut impl FnMut(Segment)) {
+        self.finish_until(f64::INFINITY, out);
+    }
+
+    /// Ends the motion so far, at the latest at `t_limit_s` (the start of what follows).
+    fn finish_until(&mut self, t_limit_s: f64, out: &mut impl FnMut(Segment)) {
+        if let Some(last) = self.planned.back() {
+            let end = (last.t1_s() - self.tau_lo).min(t_limit_s);
+            self.emit_until(end, out);
+        }
+        self.planned.clear();
+        self.fresh = true;
+    }
+
+    /// Hands on the commanded motion from `t_out` to `t_end`, a piece between each two
+    /// consecutive breaks.
+    fn emit_until(&mut self, t_end: f64, out: &mut impl FnMut(Segment)) {
+        while self.t_out < t_end {
+            let ta = self.t_out;
+            let tb = self.next_break(ta).min(t_end);
+            if tb - ta > 1e-12 {
+                out(self.piece(ta, tb));
+            }
+            self.t_out = tb;
+            self.drop_unneeded();
+        }
+    }
+
+    /// The first break of the commanded motion after `t` (never smaller than at the last
+    /// call): a planned break b seen by a pulse of offset τ is at b − τ; the planned breaks
+    /// themselves (offset 0) split the pieces by planned move too.
+    fn next_break(&mut self, t: f64) -> f64 {
+        let mut best = f64::INFINITY;
+        for slot in 0..self.break_slots {
+            let tau = self.offsets[slot];
+            // Breaks of the planned motion after t + τ: the pieces' starts and the end.
+            let want = t + tau + 1e-12;
+            let i = self.planned.next_start(slot, want);
+            let found = match self.planned.get(i) {
+                Some(s) => Some(s.t0_s),
+                None => self.planned.back().map(Segment::t1_s).filter(|&b| b > want),
+            };
+            if let Some(b) = found {
+                best = best.min(b - tau);
+            }
+        }
+        best
+    }
+
+    /// The commanded piece over [ta, tb), inside which no pulse crosses a planned break
+    /// (`ta` never smaller than at the last call).
+    fn piece(&mut self, ta: f64, tb: f64) -> Segment {
+        let mid = 0.5 * (ta + tb);
+        let own = self.planned_at(0, mid);
+        let (p0, v0, a0) = self.planned_state(own, ta);
+        let (mut p, mut v, mut a) = (p0, v0, a0);
+        // Both axes in one pass over the pulses when they have the same shaper (the same
+        // sums, in the same order, as one axis at a time).
+        let same = self.axes[0] == self.axes[1];
+        let axes = self.axes;
+        for (axis, pulses) in axes.iter().enumerate() {
+            if *pulses == Pulses::IDENTITY || (same && axis == 1) {
+                continue;
+            }
+            let (mut pk, mut vk, mut ak) = ([0.0; 2], [0.0; 2], [0.0; 2]);
+            for (i, (w, tau)) in pulses.iter().enumerate() {
+                let s = self.planned_at(self.slots[axis][i], mid + tau);
+                let (ps, vs, as_) = self.planned_state(s, ta + tau);
+                for k in 0..2 {
+                    pk[k] += w * ps[k];
+                    vk[k] += w * vs[k];
+                    ak[k] += w * as_[k];
+                }
+            }
+            for k in 0..2 {
+                if k == axis || same {
+                    p[k] = pk[k];
+                    v[k] = vk[k];
+                    a[k] = ak[k];
+                }
+            }
+        }
+        let (line, phase) = match own.and_then(|i| self.planned.get(i)) {
+            Some(s) => (s.line, s.phase),
+            None => {
+                let s = self.planned.front().or(self.planned.back());
+                (s.map_or(0, |s| s.line), super::Phase::Rest)
+            }
+        };
+        Segment {
+            t0_s: ta,
+            dt_s: tb - ta,
+            p,
+            v,
+            a,
+            line,
+            phase,
+        }
+    }
+
+    /// The index of the planned piece in force at `t` (None before the first or after the
+    /// last), asked through lookup slot `slot`.
+    fn planned_at(&mut self, slot: usize, t: f64) -> Option<usize> {
+        let i = self.planned.in_force(slot, t);
+        self.planned.get(i).filter(|s| s.t0_s <= t).map(|_| i)
+    }
+
+    /// Planned position, velocity and acceleration at `t` on piece `i` (extended as a
+    /// polynomial), or at rest before the first / after the last piece.
+    fn planned_state(&self, i: Option<usize>, t: f64) -> (Vec3, Vec3, Vec3) {
+        match i.and_then(|i| self.planned.get(i)) {
+            Some(s) => s.at(t - s.t0_s),
+            None => {
+                let rest = |p: Vec3| (p, Vec3::zeros(), Vec3::zeros());
+                match (self.planned.front(), self.planned.back()) {
+                    (Some(first), _) if t < first.t0_s => rest(first.p),
+                    (_, Some(last)) => rest(last.end().0),
+                    _ => rest(Vec3::zeros()),
+                }
+            }
+        }
+    }
+
+    /// Drops the planned pieces no pulse will look at again.
+    fn drop_unneeded(&mut self) {
+        while self.planned.len() > 1
+            && self
+                .planned
+                .front()
+                .is_some_and(|s| s.t1_s() < self.t_out + self.tau_lo)
+        {
+            self.planned.pop_front();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::motion::Phase;
+
+    /// A planned chain: from rest, accelerate along X, cruise, a corner into Y (velocity
+    /// jump), decelerate to rest; a Z move meanwhile.
+    fn planned_chain() -> Vec<Segment> {
+        let seg = |t0: f64, dt: f64, p: [f64; 3], v: [f64; 3], a: [f64; 3]| Segment {
+            t0_s: t0,
+            dt_s: dt,
+            p: Vec3::from(p),
+            v: Vec3::from(v),
+            a: Vec3::from(a),
+            line: (t0 * 1000.0) as u64,
+            phase: Phase::Cruise,
+        };
+        let mut out = vec![seg(
+            0.1,
+            0.04,
+            [0.0, 0.0, 5.0],
+            [0.0, 0.0, 0.0],
+            [2500.0, 0.0, 10.0],
+        )];
+        let chain = |out: &mut Vec<Segment>, dt: f64, v: [f64; 3], a: [f64; 3]| {
+            let last = *out.last().unwrap();
+            let (p, _) = last.end();
+            out.push(seg(last.t1_s(), dt, [p.x, p.y, p.z], v, a));
+        };
+        chain(&mut out, 0.03, [100.0, 0.0, 0.4], [0.0, 0.0, 0.0]);
+        chain(&mut out, 0.02, [0.0, 80.0, 0.0], [0.0, 0.0, 0.0]);
+        chain(&mut out, 0.032, [0.0, 80.0, 0.0], [0.0, -2500.0, 0.0]);
+        out
+    }
+
+    /// The planned position at t, directly (rest before and after).
+    fn planned_at(chain: &[Segment], t: f64) -> Vec3 {
+        let first = chain[0];
+        if t < first.t0_s {
+            return first.p;
+        }
+        match chain.iter().find(|s| t < s.t1_s()) {
+            Some(s) => s.at(t - s.t0_s).0,
+            None => chain[chain.len() - 1].end().0,
+        }
+    }
+
+    #[test]
+    fn commanded_pieces_are_the_weighted_sum_of_shifted_planned_positions() {
+        let shaper = InputShaper {
+            x: Some(AxisShaper {
+                kind: ShaperType::Mzv,
+                freq_hz: 40.0,
+                damping_ratio: 0.1,
+            }),
+            y: Some(AxisShaper {
+                kind: ShaperType::ThreeHumpEi,
+                freq_hz: 55.0,
+                damping_ratio: 0.05,
+            }),
+        };
+        let chain = planned_chain();
+        let mut s = Shaper::new(&shaper);
+        let mut out = Vec::new();
+        for seg in &chain {
+            s.push(*seg, &mut |c| out.push(c));
+        }
+        s.finish(&mut |c| out.push(c));
+        // Contiguous in time and position; each piece a quadratic.
+        for w in out.windows(2) {
+            assert!((w[0].t1_s() - w[1].t0_s).abs() < 1e-12);
+            assert!((w[0].end().0 - w[1].p).norm() < 1e-9);
+        }
+        let (px, py) = (Pulses::of(shaper.x), Pulses::of(shaper.y));
+        let (first, last) = (out[0], out[out.len() - 1]);
+        assert!((first.t0_s - (0.1 - px.span_s().1.max(py.span_s().1))).abs() < 1e-12);
+        let end = chain[chain.len() - 1].t1_s() - px.span_s().0.min(py.span_s().0);
+        assert!((last.t1_s() - end).abs() < 1e-12);
+        // At many instants, against the convolution computed directly.
+        for k in 0..=2000 {
+            let t = first.t0_s + (last.t1_s() - first.t0_s) * k as f64 / 2000.0;
+            let piece = out.iter().find(|c| t < c.t1_s()).unwrap_or(&last);
+            let got = piece.at(t - piece.t0_s).0;
+            let conv = |p: &Pulses, axis: usize| -> f64 {
+                p.iter()
+                    .map(|(a, tau)| a * planned_at(&chain, t + tau)[axis])
+                    .sum()
+            };
+            let want = Vec3::new(conv(&px, 0), conv(&py, 1), planned_at(&chain, t).z);
+            assert!((got - want).norm() < 1e-9, "t = {t}: {got} vs {want}");
+        }
+    }
+
+    #[test]
+    fn no_shaper_hands_on_the_planned_pieces() {
+        let chain = planned_chain();
+        let mut s = Shaper::new(&InputShaper::default());
+        assert!(s.is_identity());
+        let mut out = Vec::new();
+        for seg in &chain {
+            s.push(*seg, &mut |c| out.push(c));
+        }
+        s.finish(&mut |c| out.push(c));
+        assert_eq!(out, chain);
+    }
+}
