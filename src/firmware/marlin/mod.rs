@@ -2,10 +2,12 @@
 //! segments ([`segmenter`], `line_to_destination_kinematic`), each segment a planner block
 //! on whole tower steps ([`block`], `_populate_block`: per-tower limits, classic jerk), the
 //! block buffer's bounded lookahead ([`lookahead`], `recalculate`), each block's step-rate
-//! trapezoid ([`trapezoid`]) or S-curve ([`scurve`]) and its pieces, linear in tower space ([`pieces`]). Arcs come
+//! trapezoid ([`trapezoid`]) or S-curve ([`scurve`]) as the stepper ISR times it ([`isr`]),
+//! and its pieces, linear in tower space ([`pieces`]). Arcs come
 //! cut by `plan_arc` from the interpreter; each chord is one block.
 
 pub mod block;
+pub mod isr;
 pub mod lookahead;
 pub mod pieces;
 pub mod scurve;
@@ -217,7 +219,7 @@ impl Marlin {
             let b = &pb.block;
             let t = trapezoid::trapezoid(b, pb.entry_mm_s, pb.exit_mm_s);
             let n = f64::from(b.step_events);
-            trapezoid::ramps(
+            isr::ramps(
                 &t,
                 b.accel_steps_s2,
                 n,
