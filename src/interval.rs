@@ -22,6 +22,15 @@ impl Interval {
         }
     }
 
+    /// The smallest range holding both.
+    #[inline(always)]
+    pub fn join(self, o: Interval) -> Interval {
+        Interval {
+            lo: self.lo.min(o.lo),
+            hi: self.hi.max(o.hi),
+        }
+    }
+
     /// The single value `x`.
     #[inline(always)]
     pub fn point(x: f64) -> Interval {
@@ -121,6 +130,20 @@ impl Neg for Interval {
     }
 }
 
+/// The smaller of two numbers that are not NaN: one instruction, where `f64::min` spends
+/// four on NaN. The products of finite intervals are NaN only from 0·∞, which a user of the
+/// bounds rules out by refusing huge inputs (`delta::bounds`).
+#[inline(always)]
+fn lesser(a: f64, b: f64) -> f64 {
+    if a < b { a } else { b }
+}
+
+/// The greater of two numbers that are not NaN (see [`lesser`]).
+#[inline(always)]
+fn greater(a: f64, b: f64) -> f64 {
+    if a > b { a } else { b }
+}
+
 impl Mul for Interval {
     type Output = Interval;
     #[inline(always)]
@@ -132,8 +155,8 @@ impl Mul for Interval {
             self.hi * o.hi,
         );
         Interval {
-            lo: a.min(b).min(c.min(d)),
-            hi: a.max(b).max(c.max(d)),
+            lo: lesser(lesser(a, b), lesser(c, d)),
+            hi: greater(greater(a, b), greater(c, d)),
         }
     }
 }

@@ -24,7 +24,7 @@ mod sequence;
 mod trace;
 
 pub use move_check::{DENSE_ENV, MoveChecker, Scratch};
-pub use observe::{Evaluated, Observer, Verdict, Window};
+pub use observe::{Evaluated, Observer, RunPeaks, Verdict, Window};
 pub use sequence::{Batch, MoveWork, Sequencer};
 pub use trace::{TraceRow, TraceRows, TraceWindow, trace_header};
 
@@ -279,21 +279,23 @@ pub fn check_file(
         inner: file,
         bar: progress,
     };
-    let totals = run(
-        BufReader::with_capacity(1 << 16, input),
-        machine,
-        (),
-        |r| {
-            report.add_move(&r.stats);
-            report.add_end_xy(r.end_xy_mm, machine.geometry.print_radius_mm);
-            if let Some(bar) = progress
-                && report.summary.moves.is_multiple_of(PROGRESS_EVERY_MOVES)
-            {
-                bar.set_message(format!("{} moves", report.summary.moves));
-            }
-        },
-        |d| diags.push(d),
-    )
+    let on_move = |r: MoveResult<()>| {
+        report.add_move(&r.stats);
+        report.add_end_xy(r.end_xy_mm, machine.geometry.print_radius_mm);
+        if let Some(bar) = progress
+            && report.summary.moves.is_multiple_of(PROGRESS_EVERY_MOVES)
+        {
+            bar.set_message(format!("{} moves", report.summary.moves));
+        }
+    };
+    let input = BufReader::with_capacity(1 << 16, input);
+    let on_diag = |d| diags.push(d);
+    // Without the list of moves, only the run's peaks and the violations need be exact.
+    let totals = if all_moves {
+        run(input, machine, (), on_move, on_diag)
+    } else {
+        run(input, machine, RunPeaks(()), on_move, on_diag)
+    }
     .with_context(|| format!("cannot read {name}"))?;
     report.add_diagnostics(diags);
     report.note_footprint(machine.geometry.print_radius_mm);

@@ -10,7 +10,7 @@ use crate::motion::drive::{Drive, Response};
 use crate::path::Path;
 use crate::report::{MoveStats, NEAR_SINGULAR_RATIO, Problem, share};
 use crate::resample::{
-    Phase, PieceWork, Sample, SampleSink, StateBox, peak_candidates, sample_piece,
+    Phase, PieceWork, Sample, SampleSink, StateBox, peak_candidates, piece_states, sample_piece,
 };
 
 use super::MoveResult;
@@ -46,6 +46,11 @@ pub struct MoveChecker<'m, O = ()> {
     sparse: bool,
     /// Samples left uncomputed so far (all threads).
     skipped: AtomicU64,
+    /// The run's peaks so far, when the observer needs only those and the violations
+    /// ([`Observer::move_peaks`]): pieces whose bounds stay below them are not computed.
+    run_floor: Option<RunFloor>,
+    /// The arm tension above which a move is a violation (N; infinite without magnets).
+    hold_n: f64,
 }
 
 impl<'m, O: Observer> MoveChecker<'m, O> {
@@ -54,13 +59,15 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
             Drive::Rigid => None,
             Drive::Spring(s) => Some(Response::new(s).with_step(machine.sampling.period_s)),
         };
+        let sparse =
+            response.is_some() && !observer.every_sample() && std::env::var_os(DENSE_ENV).is_none();
         MoveChecker {
             machine,
             model: machine.model(),
-            sparse: response.is_some()
-                && !observer.every_sample()
-                && std::env::var_os(DENSE_ENV).is_none(),
+            sparse,
             response,
+            run_floor: (sparse && !observer.move_peaks()).then(RunFloor::default),
+            hold_n: machine.geometry.arm_magnet_hold_n.unwrap_or(f64::INFINITY),
             observer,
             skipped: AtomicU64::new(0),
         }
@@ -75,6 +82,7 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
     pub fn dense(self) -> Self {
         MoveChecker {
             sparse: false,
+            run_floor: None,
             ..self
         }
     }
@@ -88,6 +96,11 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
     /// to `out`: the samples gathered into blocks (which span moves, so that the vectorised
     /// forces run on full blocks) and each block's runs handed to the verdict and the
     /// observer.
+    ///
+    /// With a run floor, a move's pieces are compared with the run's peaks known when the
+    /// call starts; a move some of whose samples went uncomputed and that turns out to be a
+    /// violation is sampled again, densely, so that what the report says of it is exact.
+    /// The run's peaks are then raised by the moves' own.
     pub fn check_moves(
         &self,
         scratch: &mut Scratch,
@@ -95,10 +108,11 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
         moves: &[MoveWork],
         out: &mut Vec<MoveResult<O::PerMove>>,
     ) {
-        let period_s = self.machine.sampling.period_s;
         scratch.len = 0;
-        for m in moves {
-            let slot = out.len();
+        let base = out.len();
+        let run = self.run_floor.as_ref().map(RunFloor::get);
+        let mut revisit = std::mem::take(&mut scratch.revisit);
+        for (idx, m) in moves.iter().enumerate() {
             out.push(MoveResult {
                 group: m.group,
                 stats: m.stats.clone(),
@@ -106,24 +120,105 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
                 end_xy_mm: m.end_xy_mm,
             });
             let works = pieces.get(m.first..m.first + m.count).unwrap_or_default();
-            let floor = self.floor(works);
-            for work in works {
-                let seg = &work.piece.commanded;
-                if seg.dt_s > MAX_SAMPLES_PER_PIECE * period_s {
-                    self.check_ends_only(seg, &mut out[slot].stats);
-                    continue;
+            let skipped = match &run {
+                // A line split between batches is joined after the checks: its parts
+                // could not be sampled again.
+                Some(run) if !m.split => {
+                    self.sample_move(scratch, works, base + idx, out, Some(Reference::Run(run)))
                 }
-                let mut sink = MoveSink {
-                    checker: self,
-                    scratch: &mut *scratch,
-                    out: &mut *out,
-                    slot,
-                    floor: floor.as_ref(),
-                };
-                sample_piece(work, self.response.as_ref(), period_s, &mut sink);
+                _ => {
+                    let floor = self.floor(works);
+                    let reference = floor.as_ref().map(Reference::Move);
+                    self.sample_move(scratch, works, base + idx, out, reference)
+                }
+            };
+            if skipped {
+                revisit.push(idx);
             }
         }
         self.flush(scratch, out);
+        for &idx in &revisit {
+            let (m, slot) = (&moves[idx], base + idx);
+            if self.flagged(&out[slot].stats) {
+                out[slot].stats = m.stats.clone();
+                out[slot].observed = self.observer.start(m.stats.line);
+                let works = pieces.get(m.first..m.first + m.count).unwrap_or_default();
+                self.sample_move(scratch, works, slot, out, None);
+                self.flush(scratch, out);
+            }
+        }
+        revisit.clear();
+        scratch.revisit = revisit;
+        if let Some(floor) = &self.run_floor {
+            let whole = moves.iter().zip(&out[base..]).filter(|(m, _)| !m.split);
+            for (_, r) in whole {
+                floor.raise(&r.stats);
+            }
+        }
+    }
+
+    /// Samples one move's pieces into the blocks (its result is `out[slot]`), a sparse
+    /// evaluation against `reference` if there is one; whether some samples went
+    /// uncomputed.
+    fn sample_move(
+        &self,
+        scratch: &mut Scratch,
+        works: &[PieceWork],
+        slot: usize,
+        out: &mut Vec<MoveResult<O::PerMove>>,
+        reference: Option<Reference>,
+    ) -> bool {
+        let period_s = self.machine.sampling.period_s;
+        let mut sink = MoveSink {
+            checker: self,
+            scratch,
+            out,
+            slot,
+            reference,
+            skipped: false,
+        };
+        if sink.whole_pieces() && self.skip_whole(works, &mut sink) {
+            return true;
+        }
+        for work in works {
+            let seg = &work.piece.commanded;
+            if seg.dt_s > MAX_SAMPLES_PER_PIECE * period_s {
+                if let Some(r) = sink.out.get_mut(slot) {
+                    self.check_ends_only(seg, &mut r.stats);
+                }
+                continue;
+            }
+            sample_piece(work, self.response.as_ref(), period_s, &mut sink);
+        }
+        sink.skipped
+    }
+
+    /// Offers `sink` all the samples of a move's pieces at once, in one box: one bound for
+    /// the move instead of one per piece.
+    fn skip_whole(&self, works: &[PieceWork], sink: &mut MoveSink<O>) -> bool {
+        let (Some(r), Some((first, rest))) = (&self.response, works.split_first()) else {
+            return false;
+        };
+        let period_s = self.machine.sampling.period_s;
+        let sampled = |w: &PieceWork| w.piece.commanded.dt_s <= MAX_SAMPLES_PER_PIECE * period_s;
+        if !works.iter().all(sampled) {
+            return false;
+        }
+        let (mut states, mut count) = piece_states(first, r, period_s);
+        for w in rest {
+            let (b, n) = piece_states(w, r, period_s);
+            states = states.join(&b);
+            count += n;
+        }
+        sink.skip(&states, count)
+    }
+
+    /// Whether the report lists a move with these statistics: a problem, a motor asked
+    /// more than it gives, an arm pulled off its magnets.
+    fn flagged(&self, stats: &MoveStats) -> bool {
+        stats.problem.is_some()
+            || stats.over_force()
+            || stats.peak_tension_n.iter().any(|&t| t > self.hold_n)
     }
 
     /// For a sparse evaluation of a move with a long piece: lower bounds of the move's
@@ -252,14 +347,68 @@ struct Floor {
     speed_mm_s: f64,
 }
 
+/// The run's peaks so far, per tower (see [`Floor`]): the largest over the reachable moves
+/// checked so far, shared between the workers. Kept as the bits of non-negative floats,
+/// which order as the floats do.
+#[derive(Default)]
+struct RunFloor {
+    force_n: [AtomicU64; 3],
+    share: [AtomicU64; 3],
+    tension_n: [AtomicU64; 3],
+}
+
+impl RunFloor {
+    fn get(&self) -> Floor {
+        let get = |a: &[AtomicU64; 3]| {
+            a.each_ref()
+                .map(|x| f64::from_bits(x.load(Ordering::Relaxed)))
+        };
+        Floor {
+            force_n: get(&self.force_n),
+            share: get(&self.share),
+            tension_n: get(&self.tension_n),
+            speed_mm_s: 0.0,
+        }
+    }
+
+    /// Takes a move's peaks, unless the report leaves them out (an unreachable pose).
+    fn raise(&self, stats: &MoveStats) {
+        if stats.problem.as_ref().is_some_and(Problem::unreachable) {
+            return;
+        }
+        let raise = |a: &AtomicU64, v: f64| {
+            if v > 0.0 {
+                a.fetch_max(v.to_bits(), Ordering::Relaxed);
+            }
+        };
+        for i in 0..3 {
+            raise(&self.force_n[i], stats.peak_force_n[i]);
+            raise(&self.share[i], stats.worst[i].ratio);
+            raise(&self.tension_n[i], stats.peak_tension_n[i]);
+        }
+    }
+}
+
+/// What a sparse evaluation compares its bounds with.
+#[derive(Clone, Copy)]
+enum Reference<'a> {
+    /// The move's own peak candidates (and its samples so far): its statistics stay exact.
+    Move(&'a Floor),
+    /// The run's peaks so far, from other moves ([`RunFloor`]): only the run's peaks and the
+    /// violations stay exact. Whole pieces are offered too.
+    Run(&'a Floor),
+}
+
 /// The samples of the move whose result is `out[slot]`, on their way into the blocks.
 struct MoveSink<'a, 'm, O: Observer> {
     checker: &'a MoveChecker<'m, O>,
     scratch: &'a mut Scratch,
     out: &'a mut Vec<MoveResult<O::PerMove>>,
     slot: usize,
-    /// The move's peak candidates, when it is evaluated sparsely.
-    floor: Option<&'a Floor>,
+    /// What the bounds are compared with, when the move is evaluated sparsely.
+    reference: Option<Reference<'a>>,
+    /// Some samples were left uncomputed.
+    skipped: bool,
 }
 
 impl<O: Observer> SampleSink for MoveSink<'_, '_, O> {
@@ -272,41 +421,62 @@ impl<O: Observer> SampleSink for MoveSink<'_, '_, O> {
     }
 
     fn sparse(&self) -> bool {
-        self.floor.is_some()
+        self.reference.is_some()
+    }
+
+    fn whole_pieces(&self) -> bool {
+        matches!(self.reference, Some(Reference::Run(_)))
     }
 
     /// A run goes uncomputed when its bounds (`DeltaModel::bound`: every state of the box a
     /// valid pose, |Q_i|, the share of the available force, the tension and the carriage
-    /// speed each with their margin) are below what the move has already reached, strictly, on every tower: then
-    /// none of its samples could have changed a peak, where it was, or a problem, so the
-    /// statistics are the dense ones. What the move has reached: its samples so far (the
-    /// block flushed first) and its peak candidates.
+    /// speed each with their margin) are below the reference, strictly, on every tower.
+    ///
+    /// Against the move's own peaks (its samples so far, the block flushed first, and its
+    /// peak candidates): then none of its samples could have changed a peak, where it was,
+    /// or a problem, so the statistics are the dense ones.
+    ///
+    /// Against the run's peaks, each also below its violation (a share of 1, the magnets'
+    /// hold): then none could have changed the run's peaks or made the move a violation.
     fn skip(&mut self, states: &StateBox, count: u64) -> bool {
-        let (Some(floor), Some(b)) = (
-            self.floor,
+        let (Some(reference), Some(b)) = (
+            self.reference,
             self.checker
                 .model
                 .bound(&states.pos_mm, &states.vel_mm_s, &states.acc_mm_s2),
         ) else {
             return false;
         };
-        if self.scratch.len > 0 {
-            self.checker.flush(self.scratch, self.out);
-        }
+        let motors = &self.checker.machine.motors;
+        // The available force falls with the carriage speed: least at the bound.
+        let most_share = |i: usize| share(b.force_n[i], motors.available_force_n(b.speed_mm_s[i]));
+        let below = match reference {
+            Reference::Move(floor) => {
+                if self.scratch.len > 0 {
+                    self.checker.flush(self.scratch, self.out);
+                }
+                let Some(stats) = self.out.get(self.slot).map(|r| &r.stats) else {
+                    return false;
+                };
+                (0..3).all(|i| {
+                    b.force_n[i] < stats.peak_force_n[i].max(floor.force_n[i])
+                        && most_share(i) < stats.worst[i].ratio.max(floor.share[i])
+                        && b.tension_n[i] < stats.peak_tension_n[i].max(floor.tension_n[i])
+                        && b.speed_mm_s[i] < stats.peak_speed_mm_s.max(floor.speed_mm_s)
+                })
+            }
+            Reference::Run(run) => (0..3).all(|i| {
+                b.force_n[i] < run.force_n[i]
+                    && most_share(i) < run.share[i].min(1.0)
+                    && b.tension_n[i] < run.tension_n[i].min(self.checker.hold_n)
+            }),
+        };
         let Some(stats) = self.out.get_mut(self.slot).map(|r| &mut r.stats) else {
             return false;
         };
-        let motors = &self.checker.machine.motors;
-        let below = (0..3).all(|i| {
-            // The available force falls with the carriage speed: least at the bound.
-            let most_share = share(b.force_n[i], motors.available_force_n(b.speed_mm_s[i]));
-            b.force_n[i] < stats.peak_force_n[i].max(floor.force_n[i])
-                && most_share < stats.worst[i].ratio.max(floor.share[i])
-                && b.tension_n[i] < stats.peak_tension_n[i].max(floor.tension_n[i])
-                && b.speed_mm_s[i] < stats.peak_speed_mm_s.max(floor.speed_mm_s)
-        });
         if below {
             stats.samples += count;
+            self.skipped = true;
             self.checker.skipped.fetch_add(count, Ordering::Relaxed);
         }
         below
@@ -324,6 +494,8 @@ pub struct Scratch {
     cmd_pos_mm: [[f64; BLOCK]; 3],
     forces: ForceBlock,
     available_n: [[f64; BLOCK]; 3],
+    /// The moves of a call some of whose samples went uncomputed (indices in its moves).
+    revisit: Vec<usize>,
 }
 
 impl Default for Scratch {
@@ -337,6 +509,7 @@ impl Default for Scratch {
             cmd_pos_mm: [[0.0; BLOCK]; 3],
             forces: ForceBlock::default(),
             available_n: [[0.0; BLOCK]; 3],
+            revisit: Vec::new(),
         }
     }
 }

@@ -67,6 +67,44 @@ pub trait Observer: Send + Sync {
     fn every_sample(&self) -> bool {
         true
     }
+
+    /// Whether every move's own statistics must be exact. When not, only the run's peaks
+    /// (the largest over its reachable moves, with their lines and instants), the sample
+    /// count and the violations are (a report without `--all-moves`): a piece whose
+    /// bounds stay below what other moves already reached may go uncomputed.
+    fn move_peaks(&self) -> bool {
+        true
+    }
+}
+
+/// `O`, where only the run's peaks and the violations need be exact, not each move's own
+/// statistics (see [`Observer::move_peaks`]): `RunPeaks(())` for a report without
+/// `--all-moves`.
+pub struct RunPeaks<O>(pub O);
+
+impl<O: Observer> Observer for RunPeaks<O> {
+    type PerMove = O::PerMove;
+
+    fn start(&self, line: u64) -> Self::PerMove {
+        self.0.start(line)
+    }
+
+    #[inline(always)]
+    fn observe(&self, model: &DeltaModel, acc: &mut Self::PerMove, run: &Evaluated) {
+        self.0.observe(model, acc, run);
+    }
+
+    fn merge(&self, acc: &mut Self::PerMove, later: Self::PerMove) {
+        self.0.merge(acc, later);
+    }
+
+    fn every_sample(&self) -> bool {
+        self.0.every_sample()
+    }
+
+    fn move_peaks(&self) -> bool {
+        false
+    }
 }
 
 /// Observes nothing: a plain check.
@@ -105,6 +143,10 @@ impl<A: Observer, B: Observer> Observer for (A, B) {
 
     fn every_sample(&self) -> bool {
         self.0.every_sample() || self.1.every_sample()
+    }
+
+    fn move_peaks(&self) -> bool {
+        self.0.move_peaks() || self.1.move_peaks()
     }
 }
 

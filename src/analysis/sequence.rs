@@ -27,6 +27,8 @@ pub struct MoveWork {
     /// Its pieces: `pieces[first..first + count]` of the batch.
     pub first: usize,
     pub count: usize,
+    /// A part of a line split between batches (the results join the parts).
+    pub split: bool,
 }
 
 /// Work for the parallel stage: pieces and the lines they belong to, in time order.
@@ -127,8 +129,9 @@ impl<'c> Sequencer<'c> {
     /// next batch starts with a part of the same group, which the results join.
     pub fn take_batch(&mut self, complete: bool) -> Batch {
         let next = self.spare.take().unwrap_or_default();
-        let batch = std::mem::replace(&mut self.batch, next);
-        if !complete && let Some(open) = batch.moves.last() {
+        let mut batch = std::mem::replace(&mut self.batch, next);
+        if !complete && let Some(open) = batch.moves.last_mut() {
+            open.split = true;
             let mut stats = MoveStats::new(open.stats.line);
             stats.offset_mm = open.stats.offset_mm;
             self.batch.moves.push(MoveWork {
@@ -137,6 +140,7 @@ impl<'c> Sequencer<'c> {
                 end_xy_mm: open.end_xy_mm,
                 first: 0,
                 count: 0,
+                split: true,
             });
         }
         batch
@@ -270,6 +274,7 @@ impl<'c> Sequencer<'c> {
             end_xy_mm,
             first: self.batch.pieces.len(),
             count: 0,
+            split: false,
         });
     }
 }

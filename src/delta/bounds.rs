@@ -22,6 +22,10 @@ const BOUND_MARGIN_ABS: f64 = 1e-9;
 /// its top.
 const POSE_ROOM_MM: f64 = 1e-3;
 
+/// No state is bounded with a coordinate beyond this (mm, mm/s, mm/s²; NaN is not below
+/// it): nothing physical comes near, and below it no interval product overflows.
+const LARGEST_INPUT: f64 = 1e9;
+
 /// What the model can give at any state of a box, per tower.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ForceBounds {
@@ -56,8 +60,9 @@ impl DeltaModel {
     /// [`DeltaModel::evaluate`] (eq. 6-8, 13-14), with Jq_ii = √radicand_i, which does not
     /// depend on z.
     pub fn bound(&self, pos_mm: &IVec, vel_mm_s: &IVec, acc_mm_s2: &IVec) -> Option<ForceBounds> {
-        let all = pos_mm.iter().chain(vel_mm_s).chain(acc_mm_s2);
-        if !all.clone().all(|i| i.is_finite()) {
+        let mut all = pos_mm.iter().chain(vel_mm_s).chain(acc_mm_s2);
+        // Finite and far from overflow, so that no product below is 0·∞ (a NaN).
+        if !all.all(|i| i.lo.abs() <= LARGEST_INPUT && i.hi.abs() <= LARGEST_INPUT) {
             return None;
         }
         let z = pos_mm[2] + self.nozzle_offset_mm;

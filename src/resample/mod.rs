@@ -8,7 +8,7 @@ mod piece;
 
 pub use crate::motion::Phase;
 pub use curve::{Curve, Frame, Lissajous, TaylorStep, taylor_step, walk_constant_speed};
-pub use piece::{JUMP_MIN_MM_S, Kicks, PieceWork, peak_candidates, sample_piece};
+pub use piece::{JUMP_MIN_MM_S, Kicks, PieceWork, peak_candidates, piece_states, sample_piece};
 
 use crate::interval::Interval;
 use crate::path::Vec3;
@@ -24,10 +24,17 @@ pub trait SampleSink {
         false
     }
 
+    /// Whether this sink wants to be asked [`Self::skip`] for whole pieces too, before
+    /// their first sample (with every sample of the piece in the box and the count).
+    #[inline(always)]
+    fn whole_pieces(&self) -> bool {
+        false
+    }
+
     /// Whether the sampler may leave `count` consecutive grid samples of a piece
     /// uncomputed, every one of whose states lies in `states`; a sink that says yes has
-    /// counted them. Asked only of a sink that is [`Self::sparse`], in time order between
-    /// the samples.
+    /// counted them. Asked only of a sink that is [`Self::sparse`] (or, for whole pieces,
+    /// [`Self::whole_pieces`]), in time order between the samples.
     #[inline(always)]
     fn skip(&mut self, _states: &StateBox, _count: u64) -> bool {
         false
@@ -41,6 +48,18 @@ pub struct StateBox {
     pub pos_mm: [Interval; 3],
     pub vel_mm_s: [Interval; 3],
     pub acc_mm_s2: [Interval; 3],
+}
+
+impl StateBox {
+    /// The smallest box holding both.
+    pub fn join(&self, o: &StateBox) -> StateBox {
+        let join = |a: &[Interval; 3], b: &[Interval; 3]| [0, 1, 2].map(|i| a[i].join(b[i]));
+        StateBox {
+            pos_mm: join(&self.pos_mm, &o.pos_mm),
+            vel_mm_s: join(&self.vel_mm_s, &o.vel_mm_s),
+            acc_mm_s2: join(&self.acc_mm_s2, &o.acc_mm_s2),
+        }
+    }
 }
 
 impl<F: FnMut(Sample)> SampleSink for F {

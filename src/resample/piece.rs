@@ -135,11 +135,16 @@ pub fn sample_piece(
             cmd_pos_mm: p,
         }
     };
-    out.sample(state(t0, false));
-    let mut k = first_grid_index(t0, period_s);
-    if k as f64 * period_s <= t0 {
-        k += 1;
+    if let Some(r) = response
+        && out.whole_pieces()
+    {
+        let (states, count) = piece_states(work, r, period_s);
+        if out.skip(&states, count) {
+            return;
+        }
     }
+    out.sample(state(t0, false));
+    let mut k = first_inside(t0, period_s);
     match response {
         // The grid points by the lag's fixed step (`Response::walk`): no exp or sin/cos per
         // sample.
@@ -175,6 +180,28 @@ pub fn sample_piece(
     if work.end_sample && t1 > t0 {
         out.sample(state(t1, true));
     }
+}
+
+/// Every sample [`sample_piece`] takes of `work` with the drive `response` (its start, the
+/// grid points inside, its end when asked): a box holding their states, and how many they
+/// are.
+pub fn piece_states(work: &PieceWork, response: &Response, period_s: f64) -> (StateBox, u64) {
+    let seg = &work.piece.commanded;
+    let (t0, t1) = (seg.t0_s, seg.t1_s());
+    let inside = (first_grid_index(t1, period_s) - first_inside(t0, period_s)).max(0) as u64;
+    let count = 1 + inside + u64::from(work.end_sample && t1 > t0);
+    let grid = Grid {
+        work,
+        response,
+        period_s,
+    };
+    (grid.span(0.0, seg.dt_s), count)
+}
+
+/// The first grid index strictly after `t0`: the piece's first grid point inside.
+fn first_inside(t0: f64, period_s: f64) -> i64 {
+    let k = first_grid_index(t0, period_s);
+    if k as f64 * period_s <= t0 { k + 1 } else { k }
 }
 
 /// A piece with fewer grid points inside than this is sampled whole: bounding it costs
@@ -247,13 +274,17 @@ impl Grid<'_> {
         self.sample(walk, k, end, out);
     }
 
-    /// A box holding the actual state at grid points `first..=last`: the commanded
-    /// polynomial's range over [τ_first, τ_last] (its ends and, for the position, its vertex)
-    /// plus the lag's ringing from τ_first on ([`Response::ringing`]).
+    /// A box holding the actual state at grid points `first..=last` ([`Self::span`]).
     pub(super) fn states(&self, first: i64, last: i64) -> StateBox {
+        let tau = |k: i64| k as f64 * self.period_s - self.work.piece.commanded.t0_s;
+        self.span(tau(first), tau(last))
+    }
+
+    /// A box holding the actual state at every τ in [ta, tb] of the piece (s from its
+    /// start): the commanded polynomial's range (its ends and, for the position, its
+    /// vertex) plus the lag's ringing from `ta` on ([`Response::ringing`]).
+    fn span(&self, ta: f64, tb: f64) -> StateBox {
         let seg = &self.work.piece.commanded;
-        let tau = |k: i64| k as f64 * self.period_s - seg.t0_s;
-        let (ta, tb) = (tau(first), tau(last));
         let ring = self.response.ringing(&self.work.piece.lag, seg.a, ta);
         let ((pa, va, _), (pb, vb, _)) = (seg.at(ta), seg.at(tb));
         let mut b = StateBox {
@@ -300,10 +331,7 @@ pub fn peak_candidates(
     if !(period_s > 0.0 && period_s.is_finite()) {
         return;
     }
-    let mut first = first_grid_index(t0, period_s);
-    if first as f64 * period_s <= t0 {
-        first += 1;
-    }
+    let first = first_inside(t0, period_s);
     let end = first_grid_index(t1, period_s);
     let p = response.period_s();
     let mut last_k = None;
@@ -599,6 +627,65 @@ mod tests {
                         assert!(contains(b.acc_mm_s2[k], s.acc_mm_s2[k]), "{k} {s:?} {b:?}");
                     }
                 }
+            }
+        }
+    }
+
+    /// A sink offered whole pieces that records the offer and keeps the samples.
+    struct Whole {
+        samples: Vec<Sample>,
+        asked: Vec<(StateBox, u64)>,
+        skip: bool,
+    }
+
+    impl SampleSink for Whole {
+        fn sample(&mut self, s: Sample) {
+            self.samples.push(s);
+        }
+        fn whole_pieces(&self) -> bool {
+            true
+        }
+        fn skip(&mut self, b: &StateBox, count: u64) -> bool {
+            self.asked.push((*b, count));
+            self.skip
+        }
+    }
+
+    #[test]
+    fn a_whole_piece_box_holds_every_sample_and_counts_them() {
+        let (w, r) = ringing_piece();
+        // With its end sample, starting on a grid point, and a piece with no grid point.
+        let on_grid = PieceWork {
+            end_sample: true,
+            ..w
+        };
+        let mut short = w;
+        short.piece.commanded.t0_s = 12.3452;
+        short.piece.commanded.dt_s = 0.0003;
+        let mut at_grid = w;
+        at_grid.piece.commanded.t0_s = 12.345;
+        let contains = |i: Interval, x: f64| i.lo <= x && x <= i.hi;
+        for w in [w, on_grid, short, at_grid] {
+            let dense = samples(&w, Some(&r));
+            let (b, count) = piece_states(&w, &r, TS);
+            assert_eq!(count, dense.len() as u64);
+            for s in &dense {
+                for k in 0..3 {
+                    assert!(contains(b.pos_mm[k], s.pos_mm[k]), "{k} {s:?} {b:?}");
+                    assert!(contains(b.vel_mm_s[k], s.vel_mm_s[k]), "{k} {s:?} {b:?}");
+                    assert!(contains(b.acc_mm_s2[k], s.acc_mm_s2[k]), "{k} {s:?} {b:?}");
+                }
+            }
+            // Offered whole first: a yes leaves every sample out, a no takes them all.
+            for skip in [true, false] {
+                let mut sink = Whole {
+                    samples: Vec::new(),
+                    asked: Vec::new(),
+                    skip,
+                };
+                sample_piece(&w, Some(&r), TS, &mut sink);
+                assert_eq!(sink.asked, [(b, count)]);
+                assert_eq!(sink.samples, if skip { Vec::new() } else { dense.clone() });
             }
         }
     }
