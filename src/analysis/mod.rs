@@ -15,6 +15,7 @@ use rayon::prelude::*;
 use crate::firmware;
 use crate::gcode::{self, Diagnostic, Event, ReadStats};
 use crate::machine::{Firmware, Machine};
+use crate::motion::Segment;
 use crate::path::Vec3;
 use crate::report::{DiagnosticLog, MoveStats, Report};
 
@@ -25,7 +26,7 @@ mod trace;
 
 pub use move_check::{DENSE_ENV, MoveChecker, Scratch};
 pub use observe::{Evaluated, Observer, RunPeaks, Verdict, Window};
-pub use sequence::{Batch, MoveWork, Sequencer};
+pub use sequence::{Batch, Checked, MoveWork, Sequencer, checks};
 pub use trace::{TraceRow, TraceRows, TraceWindow, trace_header};
 
 /// The progress bar's move count is updated this often.
@@ -124,7 +125,7 @@ pub fn run_edited<R: Read, O: Observer>(
             |batch| {
                 let _ = to_model.send(batch);
             },
-            || spares.try_recv().ok(),
+            move || spares.try_recv().ok(),
         );
         drop(to_model);
         if let Err(panic) = model.join() {
@@ -143,7 +144,7 @@ pub fn sequence<R: Read>(
     machine: &Machine,
     batch_pieces: usize,
     on_diag: impl FnMut(Diagnostic),
-    on_batch: impl FnMut(Batch),
+    on_batch: impl FnMut(Batch) + Send,
 ) -> io::Result<RunTotals> {
     sequence_edited(
         input,
@@ -165,52 +166,95 @@ fn sequence_edited<R: Read>(
     batch_pieces: usize,
     edit: &mut EventEdit,
     mut on_diag: impl FnMut(Diagnostic),
-    mut on_batch: impl FnMut(Batch),
-    mut spare: impl FnMut() -> Option<Batch>,
+    mut on_batch: impl FnMut(Batch) + Send,
+    mut spare: impl FnMut() -> Option<Batch> + Send,
 ) -> io::Result<RunTotals> {
     let geometry = MoveChecker::new(machine, ());
-    let mut sequencer = Sequencer::new(machine, &geometry);
     let mut firmware = firmware::for_machine(machine);
-    let mut commanded = Vec::new();
     let home = Vec3::new(0.0, 0.0, machine.geometry.home_z_mm);
-    let read = gcode::interpret(
-        input,
-        home,
-        machine.dialect(),
-        |event: Event| {
-            edit(event, &mut |event| {
-                if let Event::Move(m) = &event {
-                    sequencer.check(m);
+    // The reader, interpreter, checks and firmware on this thread; the drive and the
+    // sequencer on another, fed in steps through a bounded channel, the steps' memory
+    // handed back.
+    let (to_drive, steps) = mpsc::sync_channel::<Steps>(STEPS_IN_FLIGHT);
+    let (give_back, used) = mpsc::channel::<Steps>();
+    std::thread::scope(|scope| {
+        let drive = scope.spawn(move || {
+            let mut sequencer = Sequencer::new(machine);
+            for mut step in steps {
+                for c in step.checked.drain(..) {
+                    sequencer.checked(c);
                 }
-                firmware.push(&event, &mut commanded);
-                for c in commanded.drain(..) {
+                for c in step.commanded.drain(..) {
                     sequencer.commanded(c);
-                }
-                if sequencer.pending_pieces() >= batch_pieces {
-                    if let Some(b) = spare() {
-                        sequencer.recycle(b);
+                    if sequencer.pending_pieces() >= batch_pieces {
+                        if let Some(b) = spare() {
+                            sequencer.recycle(b);
+                        }
+                        on_batch(sequencer.take_batch(false));
                     }
-                    on_batch(sequencer.take_batch(false));
                 }
-            })
-        },
-        |d| {
-            if for_firmware(&machine.firmware, &d) {
-                on_diag(d);
+                let _ = give_back.send(step);
             }
-        },
-    );
-    firmware.finish(&mut commanded);
-    for c in commanded.drain(..) {
-        sequencer.commanded(c);
-    }
-    sequencer.finish();
-    on_batch(sequencer.take_batch(true));
-    Ok(RunTotals {
-        read: read?,
-        print_time_s: sequencer.commanded_span_s(),
+            sequencer.finish();
+            on_batch(sequencer.take_batch(true));
+            sequencer.commanded_span_s()
+        });
+        let mut step = Steps::default();
+        let send = |step: &mut Steps| {
+            let next = used.try_recv().unwrap_or_default();
+            // A send fails only when the drive stage has stopped; its panic is re-raised
+            // by the join below.
+            let _ = to_drive.send(std::mem::replace(step, next));
+        };
+        let read = gcode::interpret(
+            input,
+            home,
+            machine.dialect(),
+            |event: Event| {
+                edit(event, &mut |event| {
+                    if let Event::Move(m) = &event {
+                        step.checked.push(checks(&geometry, m));
+                    }
+                    firmware.push(&event, &mut step.commanded);
+                    if step.commanded.len() >= STEP_PIECES {
+                        send(&mut step);
+                    }
+                })
+            },
+            |d| {
+                if for_firmware(&machine.firmware, &d) {
+                    on_diag(d);
+                }
+            },
+        );
+        firmware.finish(&mut step.commanded);
+        send(&mut step);
+        drop(to_drive);
+        let print_time_s = match drive.join() {
+            Ok(span) => span,
+            Err(panic) => std::panic::resume_unwind(panic),
+        };
+        Ok(RunTotals {
+            read: read?,
+            print_time_s,
+        })
     })
 }
+
+/// The checks and commanded pieces handed from the firmware to the drive stage at a time:
+/// the checks of a step's moves come before its pieces, as each move's checks come before
+/// its own pieces (the planner only delays pieces).
+#[derive(Default)]
+struct Steps {
+    checked: Vec<Checked>,
+    commanded: Vec<Segment>,
+}
+
+/// Commanded pieces in a step (see [`Steps`]).
+const STEP_PIECES: usize = 1024;
+
+/// Steps in flight between the firmware and the drive stage: bounds the memory.
+const STEPS_IN_FLIGHT: usize = 4;
 
 /// Whether a diagnostic of the reader holds for the profile's firmware: the one place
 /// where the reader's words, written for Klipper, are sorted by firmware. Marlin honours

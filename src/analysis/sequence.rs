@@ -13,6 +13,7 @@ use crate::path::Vec3;
 use crate::report::MoveStats;
 use crate::resample::{JUMP_MIN_MM_S, Kicks, PieceWork};
 
+use super::Observer;
 use super::move_check::MoveChecker;
 
 /// The actual motion's pieces of one G-code line (in a batch's piece list), with what the
@@ -43,8 +44,7 @@ pub struct Batch {
 const SETTLE_PERIODS: f64 = 2.0;
 
 /// Planned moves in; batches of piece work out.
-pub struct Sequencer<'c> {
-    checker: &'c MoveChecker<'c>,
+pub struct Sequencer {
     period_s: f64,
     response: Option<Response>,
     drive: DriveStage,
@@ -53,7 +53,7 @@ pub struct Sequencer<'c> {
     held: Option<(ActualPiece, f64)>,
     corner_until_s: f64,
     /// Lines whose planned moves were checked but whose pieces have not come yet.
-    checked: VecDeque<(MoveStats, [f64; 2])>,
+    checked: VecDeque<Checked>,
     batch: Batch,
     /// An emptied batch handed back (see [`Self::recycle`]), to be filled next.
     spare: Option<Batch>,
@@ -62,10 +62,21 @@ pub struct Sequencer<'c> {
     span_s: Option<(f64, f64)>,
 }
 
-impl<'c> Sequencer<'c> {
-    pub fn new(machine: &Machine, checker: &'c MoveChecker<'c>) -> Self {
+/// What the checks on a move's path found (see [`checks`]), with where it ends on the bed.
+pub type Checked = (MoveStats, [f64; 2]);
+
+/// The checks on a move's path, before its pieces come ([`Sequencer::checked`] takes them).
+pub fn checks<O: Observer>(checker: &MoveChecker<O>, m: &Move) -> Checked {
+    let mut stats = MoveStats::new(m.line);
+    stats.offset_mm = m.offset_mm.into();
+    checker.check_geometry(&m.path, &mut stats);
+    let end = m.path.end();
+    (stats, [end.x, end.y])
+}
+
+impl Sequencer {
+    pub fn new(machine: &Machine) -> Self {
         Sequencer {
-            checker,
             period_s: machine.sampling.period_s,
             response: match &machine.drive {
                 Drive::Rigid => None,
@@ -82,13 +93,10 @@ impl<'c> Sequencer<'c> {
         }
     }
 
-    /// Takes a move of the G-code for the checks on its path (before its pieces come).
-    pub fn check(&mut self, m: &Move) {
-        let mut stats = MoveStats::new(m.line);
-        stats.offset_mm = m.offset_mm.into();
-        self.checker.check_geometry(&m.path, &mut stats);
-        let end = m.path.end();
-        self.checked.push_back((stats, [end.x, end.y]));
+    /// Takes the checks of a move of the G-code (before its pieces come, and in the order of
+    /// the moves).
+    pub fn checked(&mut self, c: Checked) {
+        self.checked.push_back(c);
     }
 
     /// Takes the next piece of the commanded motion.
@@ -379,7 +387,7 @@ mod tests {
         let (machine, gcode) = setup();
         let fresh = batches(&machine, &gcode, 7);
         assert!(fresh.len() > 3, "{} batches", fresh.len());
-        let spares = std::cell::RefCell::new(Vec::new());
+        let spares = std::sync::Mutex::new(Vec::new());
         let mut recycled = Vec::new();
         super::super::sequence_edited(
             gcode.as_bytes(),
@@ -388,10 +396,10 @@ mod tests {
             &mut super::super::pass_on,
             |_| {},
             |b| {
-                spares.borrow_mut().push(b.clone());
+                spares.lock().unwrap().push(b.clone());
                 recycled.push(b);
             },
-            || spares.borrow_mut().pop(),
+            || spares.lock().unwrap().pop(),
         )
         .unwrap();
         assert_eq!(recycled.len(), fresh.len());

@@ -140,7 +140,12 @@ impl Response {
             c1 * self.omega2 + c2 * (2.0 * self.sigma),
             d1 * self.omega2 + d2 * (2.0 * self.sigma),
         );
-        let decay = (-self.sigma * tau_s.max(0.0)).exp();
+        // From the start (a whole piece) the decay is 1: no exp.
+        let decay = if tau_s > 0.0 {
+            (-self.sigma * tau_s).exp()
+        } else {
+            1.0
+        };
         let amplitude = |c: Vec3, d: Vec3| c.zip_map(&d, |c, d| (c * c + d * d).sqrt() * decay);
         Ringing {
             e_p,
