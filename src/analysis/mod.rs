@@ -216,7 +216,7 @@ fn sequence_edited<R: Read>(
                         step.checked.push(checks(&geometry, m));
                     }
                     firmware.push(&event, &mut step.commanded);
-                    if step.commanded.len() >= STEP_PIECES {
+                    if step.commanded.len().max(step.checked.len()) >= STEP_PIECES {
                         send(&mut step);
                     }
                 })
@@ -250,7 +250,8 @@ struct Steps {
     commanded: Vec<Segment>,
 }
 
-/// Commanded pieces in a step (see [`Steps`]).
+/// Commanded pieces, or checks, in a step (see [`Steps`]): the planner's lookahead may hold
+/// thousands of moves' checks before their pieces come.
 const STEP_PIECES: usize = 1024;
 
 /// Steps in flight between the firmware and the drive stage: bounds the memory.
