@@ -201,6 +201,22 @@ mod tests {
         ];
         let zero = [Interval::point(0.0); 3];
         assert_eq!(m.bound(&far, &zero, &zero), None);
+        // NaN or huge inputs, where a product could be 0·∞: no bound.
+        let centre = [
+            Interval::point(0.0),
+            Interval::point(0.0),
+            Interval::point(100.0),
+        ];
+        for bad in [f64::NAN, 2e9, f64::INFINITY] {
+            let v = [
+                Interval { lo: 0.0, hi: bad },
+                Interval::point(0.0),
+                Interval::point(0.0),
+            ];
+            assert_eq!(m.bound(&centre, &v, &zero), None, "{bad}");
+            assert_eq!(m.bound(&centre, &zero, &v), None, "{bad}");
+        }
+        assert!(m.bound(&centre, &zero, &zero).is_some());
         let top = [
             Interval::point(0.0),
             Interval::point(0.0),
