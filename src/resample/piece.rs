@@ -561,11 +561,13 @@ mod tests {
         (w, r)
     }
 
-    /// A sink that skips the runs `skip` says to, recording what it was asked.
+    /// A sink that skips the runs `skip` says to, recording what it was asked; offered
+    /// whole pieces too when `whole`.
     struct Sparse<F> {
         samples: Vec<Sample>,
         asked: Vec<(StateBox, u64)>,
         skip: F,
+        whole: bool,
     }
 
     impl<F: FnMut(&StateBox) -> bool> SampleSink for Sparse<F> {
@@ -574,6 +576,9 @@ mod tests {
         }
         fn sparse(&self) -> bool {
             true
+        }
+        fn whole_pieces(&self) -> bool {
+            self.whole
         }
         fn skip(&mut self, b: &StateBox, count: u64) -> bool {
             self.asked.push((*b, count));
@@ -595,6 +600,7 @@ mod tests {
                 flip = !flip;
                 flip
             },
+            whole: false,
         };
         sample_piece(&w, Some(&r), TS, &mut sink);
         let Sparse { samples, asked, .. } = sink;
@@ -631,26 +637,6 @@ mod tests {
         }
     }
 
-    /// A sink offered whole pieces that records the offer and keeps the samples.
-    struct Whole {
-        samples: Vec<Sample>,
-        asked: Vec<(StateBox, u64)>,
-        skip: bool,
-    }
-
-    impl SampleSink for Whole {
-        fn sample(&mut self, s: Sample) {
-            self.samples.push(s);
-        }
-        fn whole_pieces(&self) -> bool {
-            true
-        }
-        fn skip(&mut self, b: &StateBox, count: u64) -> bool {
-            self.asked.push((*b, count));
-            self.skip
-        }
-    }
-
     #[test]
     fn a_whole_piece_box_holds_every_sample_and_counts_them() {
         let (w, r) = ringing_piece();
@@ -678,13 +664,14 @@ mod tests {
             }
             // Offered whole first: a yes leaves every sample out, a no takes them all.
             for skip in [true, false] {
-                let mut sink = Whole {
+                let mut sink = Sparse {
                     samples: Vec::new(),
                     asked: Vec::new(),
-                    skip,
+                    skip: |_: &StateBox| skip,
+                    whole: true,
                 };
                 sample_piece(&w, Some(&r), TS, &mut sink);
-                assert_eq!(sink.asked, [(b, count)]);
+                assert_eq!(sink.asked[0], (b, count));
                 assert_eq!(sink.samples, if skip { Vec::new() } else { dense.clone() });
             }
         }
