@@ -17,8 +17,8 @@ impl Interval {
     #[inline(always)]
     pub fn hull(a: f64, b: f64) -> Interval {
         Interval {
-            lo: a.min(b),
-            hi: a.max(b),
+            lo: lesser(a, b),
+            hi: greater(a, b),
         }
     }
 
@@ -26,8 +26,8 @@ impl Interval {
     #[inline(always)]
     pub fn join(self, o: Interval) -> Interval {
         Interval {
-            lo: self.lo.min(o.lo),
-            hi: self.hi.max(o.hi),
+            lo: lesser(self.lo, o.lo),
+            hi: greater(self.hi, o.hi),
         }
     }
 
@@ -58,7 +58,7 @@ impl Interval {
     /// The largest magnitude in the range.
     #[inline(always)]
     pub fn mag(self) -> f64 {
-        self.lo.abs().max(self.hi.abs())
+        greater(self.lo.abs(), self.hi.abs())
     }
 
     /// The range of x² (tighter than x·x when the range holds zero).
@@ -68,7 +68,7 @@ impl Interval {
         if self.lo <= 0.0 && self.hi >= 0.0 {
             Interval {
                 lo: 0.0,
-                hi: a.max(b),
+                hi: greater(a, b),
             }
         } else {
             Interval::hull(a, b)
@@ -79,7 +79,7 @@ impl Interval {
     #[inline(always)]
     pub fn sqrt(self) -> Interval {
         Interval {
-            lo: self.lo.max(0.0).sqrt(),
+            lo: greater(self.lo, 0.0).sqrt(),
             hi: self.hi.sqrt(),
         }
     }
@@ -131,8 +131,10 @@ impl Neg for Interval {
 }
 
 /// The smaller of two numbers that are not NaN: one instruction, where `f64::min` spends
-/// four on NaN. The products of finite intervals are NaN only from 0·∞, which a user of the
-/// bounds rules out by refusing huge inputs (`delta::bounds`).
+/// four on NaN (every operation here uses it). Intervals are meant for finite values: a
+/// NaN may be dropped or kept, as `f64::min` may drop it too. The products of finite
+/// intervals are NaN only from 0·∞, which a user of the bounds rules out by refusing huge
+/// or NaN inputs (`delta::bounds`).
 #[inline(always)]
 fn lesser(a: f64, b: f64) -> f64 {
     if a < b { a } else { b }

@@ -127,7 +127,7 @@ fn check_stats(s: &MoveStats) {
             .all(|w| w.force_n.is_finite() && w.available_n.is_finite()),
         "{s:?}"
     );
-    match &s.problem {
+    match &s.checks.problem {
         None => {}
         Some(Problem::Unreachable { t_s, pos_mm, .. }) => {
             assert!(t_s.is_finite() && finite(pos_mm), "{s:?}")
@@ -142,7 +142,7 @@ fn check_stats(s: &MoveStats) {
         Some(Problem::BelowBed { z_mm }) => assert!(z_mm.is_finite(), "{s:?}"),
         Some(Problem::NotSampled { duration_s }) => assert!(duration_s.is_finite(), "{s:?}"),
     }
-    if let Some((_, ratio)) = s.near_singular {
+    if let Some((_, ratio)) = s.checks.near_singular {
         assert!(ratio > 0.0 && !ratio.is_nan(), "{s:?}");
     }
 }

@@ -8,9 +8,10 @@ use crate::machine::Machine;
 use crate::motion::Segment;
 use crate::motion::drive::{Drive, Response};
 use crate::path::Path;
-use crate::report::{MoveStats, NEAR_SINGULAR_RATIO, Problem, share};
+use crate::report::{MoveStats, NEAR_SINGULAR_RATIO, PathChecks, Problem, share};
 use crate::resample::{
-    Phase, PieceWork, Sample, SampleSink, StateBox, peak_candidates, piece_states, sample_piece,
+    Phase, PieceWork, SPARSE_MIN_SAMPLES, Sample, SampleSink, StateBox, peak_candidates,
+    piece_samples, piece_states, sample_piece,
 };
 
 use super::MoveResult;
@@ -115,8 +116,8 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
         for (idx, m) in moves.iter().enumerate() {
             out.push(MoveResult {
                 group: m.group,
-                stats: m.stats.clone(),
-                observed: self.observer.start(m.stats.line),
+                stats: m.stats(),
+                observed: self.observer.start(m.line),
                 end_xy_mm: m.end_xy_mm,
             });
             let works = pieces.get(m.first..m.first + m.count).unwrap_or_default();
@@ -140,8 +141,8 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
         for &idx in &revisit {
             let (m, slot) = (&moves[idx], base + idx);
             if self.flagged(&out[slot].stats) {
-                out[slot].stats = m.stats.clone();
-                out[slot].observed = self.observer.start(m.stats.line);
+                out[slot].stats = m.stats();
+                out[slot].observed = self.observer.start(m.line);
                 let works = pieces.get(m.first..m.first + m.count).unwrap_or_default();
                 self.sample_move(scratch, works, slot, out, None);
                 self.flush(scratch, out);
@@ -204,11 +205,13 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
         if !works.iter().all(sampled) {
             return false;
         }
-        let (mut states, mut count) = piece_states(first, r, period_s);
+        let count: u64 = works.iter().map(|w| piece_samples(w, period_s)).sum();
+        if count < SPARSE_MIN_SAMPLES {
+            return false;
+        }
+        let mut states = piece_states(first, r, period_s);
         for w in rest {
-            let (b, n) = piece_states(w, r, period_s);
-            states = states.join(&b);
-            count += n;
+            states = states.join(&piece_states(w, r, period_s));
         }
         sink.skip(&states, count)
     }
@@ -216,7 +219,7 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
     /// Whether the report lists a move with these statistics: a problem, a motor asked
     /// more than it gives, an arm pulled off its magnets.
     fn flagged(&self, stats: &MoveStats) -> bool {
-        stats.problem.is_some()
+        stats.checks.problem.is_some()
             || stats.over_force()
             || stats.peak_tension_n.iter().any(|&t| t > self.hold_n)
     }
@@ -257,13 +260,13 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
 
     /// A piece too long to sample: flagged, and its ends checked.
     fn check_ends_only(&self, seg: &Segment, stats: &mut MoveStats) {
-        stats.flag(Problem::NotSampled {
+        stats.checks.flag(Problem::NotSampled {
             duration_s: seg.dt_s,
         });
         for t_s in [seg.t0_s, seg.t1_s()] {
             let (pos, _, _) = seg.at(t_s - seg.t0_s);
             if let Err(e) = self.model.inverse(pos) {
-                stats.flag(unreachable(e, t_s, pos));
+                stats.checks.flag(unreachable(e, t_s, pos));
             }
         }
     }
@@ -271,25 +274,25 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
     /// The checks on a move's path as a whole: the print disc, the bed, and how close the
     /// arms come to flat (the carriage speed ratio peaks where the path is farthest from a
     /// tower).
-    pub fn check_geometry(&self, path: &Path, stats: &mut MoveStats) {
+    pub fn check_geometry(&self, path: &Path, checks: &mut PathChecks) {
         let limit_mm = self.machine.geometry.print_radius_mm;
         let radius_mm = path.max_xy2_mm2().sqrt();
         if radius_mm > limit_mm + GEOMETRY_TOLERANCE_MM {
-            stats.flag(Problem::OutsideRadius {
+            checks.flag(Problem::OutsideRadius {
                 radius_mm,
                 limit_mm,
             });
         }
         let z_mm = path.min_z_mm();
         if z_mm < -GEOMETRY_TOLERANCE_MM {
-            stats.flag(Problem::BelowBed { z_mm });
+            checks.flag(Problem::BelowBed { z_mm });
         }
         for (tower, xy) in self.model.towers_xy_mm().into_iter().enumerate() {
             let ratio = self
                 .model
                 .carriage_speed_ratio(tower, path.max_dist2_from_mm2(xy).sqrt());
-            if ratio > NEAR_SINGULAR_RATIO && stats.near_singular.is_none_or(|(_, r)| ratio > r) {
-                stats.near_singular = Some((tower, ratio));
+            if ratio > NEAR_SINGULAR_RATIO {
+                checks.near(tower, ratio);
             }
         }
     }
@@ -373,7 +376,12 @@ impl RunFloor {
 
     /// Takes a move's peaks, unless the report leaves them out (an unreachable pose).
     fn raise(&self, stats: &MoveStats) {
-        if stats.problem.as_ref().is_some_and(Problem::unreachable) {
+        if stats
+            .checks
+            .problem
+            .as_ref()
+            .is_some_and(Problem::unreachable)
+        {
             return;
         }
         let raise = |a: &AtomicU64, v: f64| {

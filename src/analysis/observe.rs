@@ -253,7 +253,7 @@ impl Observer for Verdict<'_> {
             } else {
                 let (pos, vel, acc) = run.state(j);
                 if let Err(e) = model.evaluate(pos, vel, acc) {
-                    stats.flag(unreachable(e, run.t_s[j], pos));
+                    stats.checks.flag(unreachable(e, run.t_s[j], pos));
                 }
             }
         }

@@ -10,7 +10,7 @@ use crate::machine::Machine;
 use crate::motion::drive::{ActualPiece, Drive, DriveStage, Response};
 use crate::motion::{CONTINUITY_MM, Segment};
 use crate::path::Vec3;
-use crate::report::MoveStats;
+use crate::report::{MoveStats, PathChecks};
 use crate::resample::{JUMP_MIN_MM_S, Kicks, PieceWork};
 
 use super::Observer;
@@ -22,7 +22,10 @@ use super::move_check::MoveChecker;
 pub struct MoveWork {
     /// Counts the lines' groups: the parts of one group split between batches share it.
     pub group: u64,
-    pub stats: MoveStats,
+    /// 1-based source line.
+    pub line: u64,
+    /// What the checks of the line's planned moves found.
+    pub checks: PathChecks,
     /// Where the line's last planned move ends on the bed, mm.
     pub end_xy_mm: [f64; 2],
     /// Its pieces: `pieces[first..first + count]` of the batch.
@@ -30,6 +33,16 @@ pub struct MoveWork {
     pub count: usize,
     /// A part of a line split between batches (the results join the parts).
     pub split: bool,
+}
+
+impl MoveWork {
+    /// The statistics the line's sampling starts from: its checks, no samples yet.
+    pub fn stats(&self) -> MoveStats {
+        MoveStats {
+            checks: self.checks.clone(),
+            ..MoveStats::new(self.line)
+        }
+    }
 }
 
 /// Work for the parallel stage: pieces and the lines they belong to, in time order.
@@ -63,15 +76,26 @@ pub struct Sequencer {
 }
 
 /// What the checks on a move's path found (see [`checks`]), with where it ends on the bed.
-pub type Checked = (MoveStats, [f64; 2]);
+#[derive(Clone, Debug)]
+pub struct Checked {
+    pub line: u64,
+    pub checks: PathChecks,
+    pub end_xy_mm: [f64; 2],
+}
 
 /// The checks on a move's path, before its pieces come ([`Sequencer::checked`] takes them).
 pub fn checks<O: Observer>(checker: &MoveChecker<O>, m: &Move) -> Checked {
-    let mut stats = MoveStats::new(m.line);
-    stats.offset_mm = m.offset_mm.into();
-    checker.check_geometry(&m.path, &mut stats);
+    let mut checks = PathChecks {
+        offset_mm: m.offset_mm.into(),
+        ..PathChecks::default()
+    };
+    checker.check_geometry(&m.path, &mut checks);
     let end = m.path.end();
-    (stats, [end.x, end.y])
+    Checked {
+        line: m.line,
+        checks,
+        end_xy_mm: [end.x, end.y],
+    }
 }
 
 impl Sequencer {
@@ -123,8 +147,8 @@ impl Sequencer {
             self.emit(last, prev_dt, Vec3::zeros(), 0.0, false);
         }
         self.merge_checked_into_open();
-        while let Some((stats, xy)) = self.checked.pop_front() {
-            self.open_group(stats, xy);
+        while let Some(c) = self.checked.pop_front() {
+            self.open_group(c);
         }
     }
 
@@ -140,11 +164,14 @@ impl Sequencer {
         let mut batch = std::mem::replace(&mut self.batch, next);
         if !complete && let Some(open) = batch.moves.last_mut() {
             open.split = true;
-            let mut stats = MoveStats::new(open.stats.line);
-            stats.offset_mm = open.stats.offset_mm;
+            let checks = PathChecks {
+                offset_mm: open.checks.offset_mm,
+                ..PathChecks::default()
+            };
             self.batch.moves.push(MoveWork {
                 group: open.group,
-                stats,
+                line: open.line,
+                checks,
                 end_xy_mm: open.end_xy_mm,
                 first: 0,
                 count: 0,
@@ -227,7 +254,7 @@ impl Sequencer {
         };
         let line = seg.line;
         self.merge_checked_into_open();
-        let starts_group = self.batch.moves.last().is_none_or(|m| m.stats.line != line);
+        let starts_group = self.batch.moves.last().is_none_or(|m| m.line != line);
         if starts_group {
             self.open_line(line);
         }
@@ -243,14 +270,10 @@ impl Sequencer {
         let Some(open) = self.batch.moves.last_mut() else {
             return;
         };
-        while self
-            .checked
-            .front()
-            .is_some_and(|(s, _)| s.line == open.stats.line)
-        {
-            if let Some((s, end)) = self.checked.pop_front() {
-                open.stats.merge(&s);
-                open.end_xy_mm = end;
+        while self.checked.front().is_some_and(|c| c.line == open.line) {
+            if let Some(c) = self.checked.pop_front() {
+                open.checks.merge(&c.checks);
+                open.end_xy_mm = c.end_xy_mm;
             }
         }
     }
@@ -258,28 +281,32 @@ impl Sequencer {
     /// Starts the group of `line`, after the groups of the lines checked before it that
     /// have no piece; the checks of its own planned moves merged into it.
     fn open_line(&mut self, line: u64) {
-        while self.checked.front().is_some_and(|(s, _)| s.line < line) {
-            if let Some((stats, xy)) = self.checked.pop_front() {
-                self.open_group(stats, xy);
+        while self.checked.front().is_some_and(|c| c.line < line) {
+            if let Some(c) = self.checked.pop_front() {
+                self.open_group(c);
             }
         }
-        let mut stats = MoveStats::new(line);
-        let mut xy = self.batch.moves.last().map_or([0.0; 2], |m| m.end_xy_mm);
-        while self.checked.front().is_some_and(|(s, _)| s.line == line) {
-            if let Some((s, end)) = self.checked.pop_front() {
-                stats.merge(&s);
-                xy = end;
+        let mut open = Checked {
+            line,
+            checks: PathChecks::default(),
+            end_xy_mm: self.batch.moves.last().map_or([0.0; 2], |m| m.end_xy_mm),
+        };
+        while self.checked.front().is_some_and(|c| c.line == line) {
+            if let Some(c) = self.checked.pop_front() {
+                open.checks.merge(&c.checks);
+                open.end_xy_mm = c.end_xy_mm;
             }
         }
-        self.open_group(stats, xy);
+        self.open_group(open);
     }
 
-    fn open_group(&mut self, stats: MoveStats, end_xy_mm: [f64; 2]) {
+    fn open_group(&mut self, c: Checked) {
         self.group += 1;
         self.batch.moves.push(MoveWork {
             group: self.group,
-            stats,
-            end_xy_mm,
+            line: c.line,
+            checks: c.checks,
+            end_xy_mm: c.end_xy_mm,
             first: self.batch.pieces.len(),
             count: 0,
             split: false,
@@ -361,7 +388,7 @@ mod tests {
             assert!((a.end().0 - c.p).norm() < 1e-9);
         }
         // One group per line with motion, in file order, covering every piece once.
-        let lines: Vec<u64> = b.moves.iter().map(|m| m.stats.line).collect();
+        let lines: Vec<u64> = b.moves.iter().map(|m| m.line).collect();
         assert_eq!(lines, move_lines(&machine, &gcode));
         assert_eq!(
             b.moves.iter().map(|m| m.count).sum::<usize>(),
@@ -369,15 +396,15 @@ mod tests {
         );
         for m in &b.moves {
             for p in &b.pieces[m.first..m.first + m.count] {
-                assert_eq!(p.piece.commanded.line, m.stats.line);
+                assert_eq!(p.piece.commanded.line, m.line);
             }
         }
         // The arc (line 43) has many chords, all in its group; the move out of reach
         // (line 45) is flagged by its check.
-        let arc = b.moves.iter().find(|m| m.stats.line == 43).unwrap();
+        let arc = b.moves.iter().find(|m| m.line == 43).unwrap();
         assert!(arc.count > 5);
-        let far = b.moves.iter().find(|m| m.stats.line == 45).unwrap();
-        assert!(far.stats.problem.is_some());
+        let far = b.moves.iter().find(|m| m.line == 45).unwrap();
+        assert!(far.checks.problem.is_some());
     }
 
     #[test]

@@ -40,10 +40,12 @@ pub struct ForceBounds {
 /// An interval version of a 3-vector.
 type IVec = [Interval; 3];
 
+#[inline(always)]
 fn dot(a: &IVec, b: &IVec) -> Interval {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
+#[inline(always)]
 fn cross(a: &IVec, b: &IVec) -> IVec {
     [
         a[1] * b[2] - a[2] * b[1],

@@ -11,7 +11,7 @@ mod text;
 pub use annotations::{annotations, summary_lines, verdict_line};
 pub use diagnostics::{DiagnosticKind, DiagnosticKinds, DiagnosticLog, KIND_LINES, severity_name};
 pub use github::write_github;
-pub use stats::{MoveStats, NEAR_SINGULAR_RATIO, Problem, RunForces, Worst, share};
+pub use stats::{MoveStats, NEAR_SINGULAR_RATIO, PathChecks, Problem, RunForces, Worst, share};
 pub use text::write_text;
 
 use serde::Serialize;
@@ -222,7 +222,7 @@ impl Report {
     /// Takes one move's statistics, in file order. A move out of reach adds no force: its
     /// samples near the edge of the reach ask for forces that mean nothing.
     pub fn add_move(&mut self, m: &MoveStats) {
-        let reachable = !m.problem.as_ref().is_some_and(Problem::unreachable);
+        let reachable = !m.checks.problem.as_ref().is_some_and(Problem::unreachable);
         let s = &mut self.summary;
         s.moves += 1;
         s.samples += m.samples;
@@ -244,7 +244,7 @@ impl Report {
                 peak_force_n: reachable.then_some(m.peak_force_n),
             });
         }
-        if let Some((tower, ratio)) = m.near_singular.filter(|_| reachable) {
+        if let Some((tower, ratio)) = m.checks.near_singular.filter(|_| reachable) {
             let angle = (1.0 / ratio).atan().to_degrees();
             self.add_diagnostic(&Diagnostic {
                 line: m.line,
@@ -269,7 +269,7 @@ impl Report {
 
     fn violation_of(&self, m: &MoveStats) -> Option<Violation> {
         let worst = m.worst_tower();
-        let (kind, tower, t_s, message) = match &m.problem {
+        let (kind, tower, t_s, message) = match &m.checks.problem {
             Some(
                 p @ Problem::Unreachable {
                     t_s,
@@ -283,9 +283,9 @@ impl Report {
                 *t_s,
                 format!(
                     "UNREACHABLE at X{:.3} Y{:.3} Z{:.3}: {reason}",
-                    pos_mm[0] - m.offset_mm[0],
-                    pos_mm[1] - m.offset_mm[1],
-                    pos_mm[2] - m.offset_mm[2]
+                    pos_mm[0] - m.checks.offset_mm[0],
+                    pos_mm[1] - m.checks.offset_mm[1],
+                    pos_mm[2] - m.checks.offset_mm[2]
                 ),
             ),
             Some(
@@ -365,7 +365,7 @@ impl Report {
             }
         };
         let phase = m.peak_phase[worst];
-        let reachable = !m.problem.as_ref().is_some_and(Problem::unreachable);
+        let reachable = !m.checks.problem.as_ref().is_some_and(Problem::unreachable);
         Some(Violation {
             line: m.line,
             kind,
@@ -486,7 +486,7 @@ pub(crate) mod tests {
         sample(&mut over, 2.5, Phase::Decel, [31.25, -12.0, 9.8]);
         let mut far = MoveStats::new(30);
         sample(&mut far, 3.0, Phase::Accel, [1.0, 1.0, 1.0]);
-        far.flag(Problem::Unreachable {
+        far.checks.flag(Problem::Unreachable {
             t_s: 3.0,
             tower: Some(1),
             pos_mm: [200.0, 0.0, 0.0],

@@ -85,6 +85,15 @@ pub struct MoveStats {
     pub peak_tension_t_s: [f64; 3],
     /// The fastest any carriage ran, |q̇_i| mm/s.
     pub peak_speed_mm_s: f64,
+    /// What the checks of its path and poses found.
+    pub checks: PathChecks,
+}
+
+/// What the checks of a move found apart from its forces: its problems and how close it
+/// came to a singular pose. A fraction of [`MoveStats`]' size: the sequential stages carry
+/// these from the checks of a line's planned moves to the sampling of its pieces.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PathChecks {
     /// The most severe geometric problem found, if any.
     pub problem: Option<Problem>,
     /// Near a singular pose: the tower (0 = A) whose carriage moves fastest relative to the
@@ -93,6 +102,40 @@ pub struct MoveStats {
     /// The line's G92 offset: positions are reported as the file writes them, machine
     /// position − offset, mm.
     pub offset_mm: [f64; 3],
+}
+
+impl PathChecks {
+    /// Records a problem. A move keeps its most severe one (unreachable, then above home,
+    /// then outside the radius), the first of that kind: a move that leaves the print disc
+    /// and then the arms' reach is reported unreachable.
+    pub fn flag(&mut self, problem: Problem) {
+        if self
+            .problem
+            .as_ref()
+            .is_none_or(|p| problem.severity() > p.severity())
+        {
+            self.problem = Some(problem);
+        }
+    }
+
+    /// Records a near-singular pose of `tower` at `ratio`, if it is the closest yet.
+    pub fn near(&mut self, tower: usize, ratio: f64) {
+        if self.near_singular.is_none_or(|(_, r)| ratio > r) {
+            self.near_singular = Some((tower, ratio));
+        }
+    }
+
+    /// Takes in the checks of a later part of the same move (or line): the most severe
+    /// problem, the closest approach to a singular pose, the later offset.
+    pub fn merge(&mut self, later: &PathChecks) {
+        self.offset_mm = later.offset_mm;
+        if let Some(p) = &later.problem {
+            self.flag(p.clone());
+        }
+        if let Some((tower, ratio)) = later.near_singular {
+            self.near(tower, ratio);
+        }
+    }
 }
 
 /// Below this an available force counts as this (N): the share of a motor with no force
@@ -164,9 +207,7 @@ impl MoveStats {
             peak_tension_n: [0.0; 3],
             peak_tension_t_s: [0.0; 3],
             peak_speed_mm_s: 0.0,
-            problem: None,
-            near_singular: None,
-            offset_mm: [0.0; 3],
+            checks: PathChecks::default(),
         }
     }
 
@@ -224,7 +265,6 @@ impl MoveStats {
     /// (an earlier peak wins a tie), the most severe problem, the fastest carriage ratio.
     pub fn merge(&mut self, later: &MoveStats) {
         self.samples += later.samples;
-        self.offset_mm = later.offset_mm;
         self.peak_speed_mm_s = self.peak_speed_mm_s.max(later.peak_speed_mm_s);
         for i in 0..3 {
             if later.peak_force_n[i] > self.peak_force_n[i] {
@@ -240,27 +280,7 @@ impl MoveStats {
                 self.peak_tension_t_s[i] = later.peak_tension_t_s[i];
             }
         }
-        if let Some(p) = &later.problem {
-            self.flag(p.clone());
-        }
-        if let Some((tower, ratio)) = later.near_singular
-            && self.near_singular.is_none_or(|(_, r)| ratio > r)
-        {
-            self.near_singular = Some((tower, ratio));
-        }
-    }
-
-    /// Records a problem. A move keeps its most severe one (unreachable, then above home,
-    /// then outside the radius), the first of that kind: a move that leaves the print disc
-    /// and then the arms' reach is reported unreachable.
-    pub fn flag(&mut self, problem: Problem) {
-        if self
-            .problem
-            .as_ref()
-            .is_none_or(|p| problem.severity() > p.severity())
-        {
-            self.problem = Some(problem);
-        }
+        self.checks.merge(&later.checks);
     }
 
     /// The tower (0-based) whose motor was asked the largest share of what it can give.
@@ -418,7 +438,7 @@ mod tests {
 
     #[test]
     fn the_most_severe_problem_is_kept_first_of_its_kind() {
-        let mut s = MoveStats::new(1);
+        let mut s = PathChecks::default();
         let outside = Problem::OutsideRadius {
             radius_mm: 90.0,
             limit_mm: 85.0,

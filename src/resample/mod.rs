@@ -8,7 +8,10 @@ mod piece;
 
 pub use crate::motion::Phase;
 pub use curve::{Curve, Frame, Lissajous, TaylorStep, taylor_step, walk_constant_speed};
-pub use piece::{JUMP_MIN_MM_S, Kicks, PieceWork, peak_candidates, piece_states, sample_piece};
+pub use piece::{
+    JUMP_MIN_MM_S, Kicks, PieceWork, SPARSE_MIN_SAMPLES, peak_candidates, piece_samples,
+    piece_states, sample_piece,
+};
 
 use crate::interval::Interval;
 use crate::path::Vec3;
@@ -52,13 +55,15 @@ pub struct StateBox {
 
 impl StateBox {
     /// The smallest box holding both.
+    #[inline(always)]
     pub fn join(&self, o: &StateBox) -> StateBox {
-        let join = |a: &[Interval; 3], b: &[Interval; 3]| [0, 1, 2].map(|i| a[i].join(b[i]));
-        StateBox {
-            pos_mm: join(&self.pos_mm, &o.pos_mm),
-            vel_mm_s: join(&self.vel_mm_s, &o.vel_mm_s),
-            acc_mm_s2: join(&self.acc_mm_s2, &o.acc_mm_s2),
+        let mut b = *self;
+        for k in 0..3 {
+            b.pos_mm[k] = b.pos_mm[k].join(o.pos_mm[k]);
+            b.vel_mm_s[k] = b.vel_mm_s[k].join(o.vel_mm_s[k]);
+            b.acc_mm_s2[k] = b.acc_mm_s2[k].join(o.acc_mm_s2[k]);
         }
+        b
     }
 }
 

@@ -138,8 +138,8 @@ pub fn sample_piece(
     if let Some(r) = response
         && out.whole_pieces()
     {
-        let (states, count) = piece_states(work, r, period_s);
-        if out.skip(&states, count) {
+        let count = piece_samples(work, period_s);
+        if count >= SPARSE_MIN_SAMPLES && out.skip(&piece_states(work, r, period_s), count) {
             return;
         }
     }
@@ -182,20 +182,24 @@ pub fn sample_piece(
     }
 }
 
-/// Every sample [`sample_piece`] takes of `work` with the drive `response` (its start, the
-/// grid points inside, its end when asked): a box holding their states, and how many they
-/// are.
-pub fn piece_states(work: &PieceWork, response: &Response, period_s: f64) -> (StateBox, u64) {
+/// How many samples [`sample_piece`] takes of `work`: its start, the grid points inside,
+/// its end when asked.
+pub fn piece_samples(work: &PieceWork, period_s: f64) -> u64 {
     let seg = &work.piece.commanded;
     let (t0, t1) = (seg.t0_s, seg.t1_s());
     let inside = (first_grid_index(t1, period_s) - first_inside(t0, period_s)).max(0) as u64;
-    let count = 1 + inside + u64::from(work.end_sample && t1 > t0);
+    1 + inside + u64::from(work.end_sample && t1 > t0)
+}
+
+/// A box holding the states of every sample [`sample_piece`] takes of `work` with the drive
+/// `response` (see [`piece_samples`]).
+pub fn piece_states(work: &PieceWork, response: &Response, period_s: f64) -> StateBox {
     let grid = Grid {
         work,
         response,
         period_s,
     };
-    (grid.span(0.0, seg.dt_s), count)
+    grid.span(0.0, work.piece.commanded.dt_s)
 }
 
 /// The first grid index strictly after `t0`: the piece's first grid point inside.
@@ -207,6 +211,12 @@ fn first_inside(t0: f64, period_s: f64) -> i64 {
 /// A piece with fewer grid points inside than this is sampled whole: bounding it costs
 /// about what sampling it does.
 const SPARSE_MIN_PIECE: i64 = 64;
+
+/// Fewer samples than this, offered whole (a piece, a move), are computed without a bound
+/// first: a bound and its box cost about six samples, and on the corpus's bunny boxes of
+/// seven samples or fewer are let go too rarely (29–57 % of them with the default drive)
+/// to pay for it (docs/performance.md).
+pub const SPARSE_MIN_SAMPLES: u64 = 8;
 
 /// The shortest run of grid points a sparse evaluation bounds: shorter ones are sampled.
 const SPARSE_MIN_RUN: i64 = 32;
@@ -301,7 +311,7 @@ impl Grid<'_> {
                 let tv = -seg.v[i] / seg.a[i];
                 if tv > ta && tv < tb {
                     let pv = seg.p[i] + seg.v[i] * tv + seg.a[i] * (0.5 * tv * tv);
-                    pos = Interval::hull(pos.lo.min(pv), pos.hi.max(pv));
+                    pos = pos.join(Interval::point(pv));
                 }
             }
             b.pos_mm[i] = slack(pos + ring.e_p[i], ring.u[i]).widen(ring.u[i]);
@@ -651,9 +661,10 @@ mod tests {
         let mut at_grid = w;
         at_grid.piece.commanded.t0_s = 12.345;
         let contains = |i: Interval, x: f64| i.lo <= x && x <= i.hi;
+        let mut shorts = 0;
         for w in [w, on_grid, short, at_grid] {
             let dense = samples(&w, Some(&r));
-            let (b, count) = piece_states(&w, &r, TS);
+            let (b, count) = (piece_states(&w, &r, TS), piece_samples(&w, TS));
             assert_eq!(count, dense.len() as u64);
             for s in &dense {
                 for k in 0..3 {
@@ -662,7 +673,9 @@ mod tests {
                     assert!(contains(b.acc_mm_s2[k], s.acc_mm_s2[k]), "{k} {s:?} {b:?}");
                 }
             }
-            // Offered whole first: a yes leaves every sample out, a no takes them all.
+            // Offered whole first, unless it has too few samples: a yes leaves every sample
+            // out, a no takes them all.
+            let offered = count >= SPARSE_MIN_SAMPLES;
             for skip in [true, false] {
                 let mut sink = Sparse {
                     samples: Vec::new(),
@@ -671,10 +684,16 @@ mod tests {
                     whole: true,
                 };
                 sample_piece(&w, Some(&r), TS, &mut sink);
-                assert_eq!(sink.asked[0], (b, count));
-                assert_eq!(sink.samples, if skip { Vec::new() } else { dense.clone() });
+                assert_eq!(sink.asked.first() == Some(&(b, count)), offered);
+                let left_out = skip && offered;
+                assert_eq!(
+                    sink.samples,
+                    if left_out { Vec::new() } else { dense.clone() }
+                );
             }
+            shorts += usize::from(!offered);
         }
+        assert_eq!(shorts, 1, "the short piece is sampled without a bound");
     }
 
     #[test]

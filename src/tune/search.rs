@@ -350,7 +350,7 @@ fn pass(
             let before = report.summary.violations;
             report.add_move(&r.stats);
             if report.summary.violations > before
-                && r.stats.problem.is_none()
+                && r.stats.checks.problem.is_none()
                 && let Some(ran) = ran
             {
                 let earlier = history.get(&line).copied();

@@ -22,6 +22,10 @@ use window::Window;
 /// after the last planned piece is a rest where they start and end (Klipper's trapq).
 pub struct Shaper {
     axes: [Pulses; 2],
+    /// Whether each axis is shaped (its pulses are not the identity).
+    shaped: [bool; 2],
+    /// Both axes have the same pulses.
+    same: bool,
     /// The smallest and largest offset of any pulse.
     tau_lo: f64,
     tau_hi: f64,
@@ -63,6 +67,8 @@ impl Shaper {
         }
         Shaper {
             axes,
+            shaped: axes.map(|p| p != Pulses::IDENTITY),
+            same: axes[0] == axes[1],
             tau_lo,
             tau_hi,
             planned: Window::default(),
@@ -84,7 +90,7 @@ impl Shaper {
 
     /// Whether the commanded motion is the planned one.
     pub fn is_identity(&self) -> bool {
-        self.axes == [Pulses::IDENTITY; 2]
+        self.shaped == [false; 2]
     }
 
     /// Takes the next planned piece; hands on the commanded pieces now final. A piece that
@@ -175,10 +181,9 @@ impl Shaper {
         let (mut p, mut v, mut a) = (p0, v0, a0);
         // Both axes in one pass over the pulses when they have the same shaper (the same
         // sums, in the same order, as one axis at a time).
-        let same = self.axes[0] == self.axes[1];
-        let axes = self.axes;
+        let (same, axes) = (self.same, self.axes);
         for (axis, pulses) in axes.iter().enumerate() {
-            if *pulses == Pulses::IDENTITY || (same && axis == 1) {
+            if !self.shaped[axis] || (same && axis == 1) {
                 continue;
             }
             let (mut pk, mut vk, mut ak) = ([0.0; 2], [0.0; 2], [0.0; 2]);
@@ -219,6 +224,7 @@ impl Shaper {
 
     /// The index of the planned piece in force at `t` (None before the first or after the
     /// last), asked through lookup slot `slot`.
+    #[inline(always)]
     fn planned_at(&mut self, slot: usize, t: f64) -> Option<usize> {
         let i = self.planned.in_force(slot, t);
         self.planned.get(i).filter(|s| s.t0_s <= t).map(|_| i)
@@ -226,6 +232,7 @@ impl Shaper {
 
     /// Planned position, velocity and acceleration at `t` on piece `i` (extended as a
     /// polynomial), or at rest before the first / after the last piece.
+    #[inline(always)]
     fn planned_state(&self, i: Option<usize>, t: f64) -> (Vec3, Vec3, Vec3) {
         match i.and_then(|i| self.planned.get(i)) {
             Some(s) => s.at(t - s.t0_s),

@@ -6,10 +6,11 @@
 //! forward by the pieces it passes instead of bisecting the window at every question: the
 //! same answers as a bisection of the pieces in time order.
 
-use std::collections::VecDeque;
-
 use super::pulses::MAX_PULSES;
 use crate::motion::Segment;
+
+/// Dropped pieces are removed from the vector once there are at least this many.
+const COMPACT_MIN: usize = 64;
 
 /// The most offsets looked up: the planned motion itself and every pulse of both axes.
 pub const MAX_OFFSETS: usize = 1 + 2 * MAX_PULSES;
@@ -17,7 +18,11 @@ pub const MAX_OFFSETS: usize = 1 + 2 * MAX_PULSES;
 /// Planned pieces in time order, with a forward-only cursor per offset.
 #[derive(Default)]
 pub struct Window {
-    pieces: VecDeque<Segment>,
+    /// The pieces from `head` on; those before it are dropped, and removed from the vector
+    /// a batch at a time ([`Self::pop_front`]): indexing stays a plain slice lookup, where a
+    /// ring buffer's wraps around at every question.
+    pieces: Vec<Segment>,
+    head: usize,
     /// The count of pieces ever dropped: a cursor is an index into everything ever pushed.
     dropped: usize,
     /// Per offset: the first piece that started after the last `next_start` question.
@@ -28,44 +33,58 @@ pub struct Window {
 
 impl Window {
     pub fn push(&mut self, seg: Segment) {
-        self.pieces.push_back(seg);
+        self.pieces.push(seg);
+    }
+
+    fn live(&self) -> &[Segment] {
+        &self.pieces[self.head..]
     }
 
     pub fn front(&self) -> Option<&Segment> {
-        self.pieces.front()
+        self.live().first()
     }
 
     pub fn back(&self) -> Option<&Segment> {
-        self.pieces.back()
+        self.live().last()
     }
 
     pub fn len(&self) -> usize {
-        self.pieces.len()
+        self.pieces.len() - self.head
     }
 
+    #[inline(always)]
     pub fn get(&self, i: usize) -> Option<&Segment> {
-        self.pieces.get(i)
+        self.live().get(i)
     }
 
     pub fn pop_front(&mut self) {
-        if self.pieces.pop_front().is_some() {
+        if self.head < self.pieces.len() {
+            self.head += 1;
             self.dropped += 1;
+            // The dropped pieces go once they are as many as the live ones: each piece is
+            // moved at most once on average.
+            if self.head >= COMPACT_MIN && self.head >= self.len() {
+                self.pieces.drain(..self.head);
+                self.head = 0;
+            }
         }
     }
 
     /// Drops every piece; the questions start again from the next piece pushed.
     pub fn clear(&mut self) {
-        self.dropped += self.pieces.len();
+        self.dropped += self.len();
         self.pieces.clear();
+        self.head = 0;
         self.starts = [self.dropped; MAX_OFFSETS];
         self.ends = [self.dropped; MAX_OFFSETS];
     }
 
     /// The index (in the window) of the first piece starting after `t`, asked for offset
     /// `k` with `t` never smaller than at its last question (since the last `clear`).
+    #[inline(always)]
     pub fn next_start(&mut self, k: usize, t: f64) -> usize {
         let mut i = self.starts[k].max(self.dropped) - self.dropped;
-        while self.pieces.get(i).is_some_and(|s| s.t0_s <= t) {
+        while self.get(i).is_some_and(|s| s.t0_s <= t) {
             i += 1;
         }
         self.starts[k] = i + self.dropped;
@@ -74,9 +93,10 @@ impl Window {
 
     /// The index of the first piece ending after `t` (the piece in force at `t` if it has
     /// started), asked for offset `k` with `t` never decreasing, as for `next_start`.
+    #[inline(always)]
     pub fn in_force(&mut self, k: usize, t: f64) -> usize {
         let mut i = self.ends[k].max(self.dropped) - self.dropped;
-        while self.pieces.get(i).is_some_and(|s| s.t1_s() <= t) {
+        while self.get(i).is_some_and(|s| s.t1_s() <= t) {
             i += 1;
         }
         self.ends[k] = i + self.dropped;
@@ -115,11 +135,11 @@ mod tests {
             }
         };
         push(&mut w, &mut t0, 40);
-        let bisect_start = |w: &Window, t: f64| w.pieces.partition_point(|s| s.t0_s <= t);
-        let bisect_end = |w: &Window, t: f64| w.pieces.partition_point(|s| s.t1_s() <= t);
+        let bisect_start = |w: &Window, t: f64| w.live().partition_point(|s| s.t0_s <= t);
+        let bisect_end = |w: &Window, t: f64| w.live().partition_point(|s| s.t1_s() <= t);
         let offsets = [0.0, -0.004, 0.0031, 0.012];
         let mut t = -0.01;
-        let mut checked = 0;
+        let (mut checked, mut compactions) = (0, 0);
         while t < t0 + 0.02 {
             for (k, tau) in offsets.iter().enumerate() {
                 assert_eq!(
@@ -131,14 +151,19 @@ mod tests {
                 checked += 1;
             }
             if w.front().is_some_and(|s| s.t1_s() < t - 0.005) {
+                let head = w.head;
                 w.pop_front();
+                compactions += usize::from(w.head < head);
             }
-            if checked == 200 {
+            // Pieces keep coming for a while: the dropped ones are removed from the vector
+            // several times.
+            if checked % 200 == 0 && checked <= 4000 {
                 push(&mut w, &mut t0, 20);
             }
             t += 0.00037;
         }
-        assert!(w.dropped > 10, "{}", w.dropped);
+        assert!(w.dropped > 3 * COMPACT_MIN, "{}", w.dropped);
+        assert!(compactions > 2, "{compactions}");
         w.clear();
         push(&mut w, &mut t0, 3);
         assert_eq!(w.len(), 3);
