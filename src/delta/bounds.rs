@@ -60,8 +60,30 @@ impl DeltaModel {
     /// [`BOUND_MARGIN`]; None unless every state of the box is provably a valid pose (in
     /// reach with room, below the tops, Jx far from singular, finite). The same formulas as
     /// [`DeltaModel::evaluate`] (eq. 6-8, 13-14), with Jq_ii = √radicand_i, which does not
-    /// depend on z.
+    /// depend on z. Compiled for AVX2 as well as the baseline, chosen at run time: the same
+    /// operations in the same order, so the same bounds bit for bit (as `forces_block`).
     pub fn bound(&self, pos_mm: &IVec, vel_mm_s: &IVec, acc_mm_s2: &IVec) -> Option<ForceBounds> {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2, checked just above.
+            return unsafe { self.bound_avx2(pos_mm, vel_mm_s, acc_mm_s2) };
+        }
+        self.bound_generic(pos_mm, vel_mm_s, acc_mm_s2)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn bound_avx2(&self, pos_mm: &IVec, vel_mm_s: &IVec, acc_mm_s2: &IVec) -> Option<ForceBounds> {
+        self.bound_generic(pos_mm, vel_mm_s, acc_mm_s2)
+    }
+
+    #[inline(always)]
+    fn bound_generic(
+        &self,
+        pos_mm: &IVec,
+        vel_mm_s: &IVec,
+        acc_mm_s2: &IVec,
+    ) -> Option<ForceBounds> {
         let mut all = pos_mm.iter().chain(vel_mm_s).chain(acc_mm_s2);
         // Finite and far from overflow, so that no product below is 0·∞ (a NaN).
         if !all.all(|i| i.lo.abs() <= LARGEST_INPUT && i.hi.abs() <= LARGEST_INPUT) {
@@ -167,6 +189,8 @@ mod tests {
             let m = kossel();
             let centre = [Vec3::new(x, y, z), Vec3::from(vel), Vec3::from(acc)];
             let ([p, v, a], [ps, vs, as_]) = boxed(centre, size, t);
+            // The CPU's vector build and the baseline agree bit for bit.
+            prop_assert_eq!(m.bound(&p, &v, &a), m.bound_generic(&p, &v, &a));
             let Some(b) = m.bound(&p, &v, &a) else { return Ok(()) };
             let s = m.evaluate(ps, vs, as_).expect("a bounded box holds valid poses");
             for i in 0..3 {
