@@ -14,7 +14,6 @@ pub use pulses::{
 };
 
 use super::{CONTINUITY_MM, Segment};
-use crate::path::Vec3;
 use window::Window;
 
 /// The commanded motion of a planned one, as a stream: planned pieces in, commanded pieces
@@ -176,20 +175,21 @@ impl Shaper {
     /// (`ta` never smaller than at the last call).
     fn piece(&mut self, ta: f64, tb: f64) -> Segment {
         let mid = 0.5 * (ta + tb);
-        let own = self.planned_at(0, mid);
-        let (p0, v0, a0) = self.planned_state(own, ta);
+        let planned = &mut self.planned;
+        let own = planned.planned_at(0, mid);
+        let (p0, v0, a0) = planned.state(own, ta);
         let (mut p, mut v, mut a) = (p0, v0, a0);
         // Both axes in one pass over the pulses when they have the same shaper (the same
         // sums, in the same order, as one axis at a time).
-        let (same, axes) = (self.same, self.axes);
-        for (axis, pulses) in axes.iter().enumerate() {
+        let same = self.same;
+        for (axis, pulses) in self.axes.iter().enumerate() {
             if !self.shaped[axis] || (same && axis == 1) {
                 continue;
             }
             let (mut pk, mut vk, mut ak) = ([0.0; 2], [0.0; 2], [0.0; 2]);
             for (i, (w, tau)) in pulses.iter().enumerate() {
-                let s = self.planned_at(self.slots[axis][i], mid + tau);
-                let (ps, vs, as_) = self.planned_state(s, ta + tau);
+                let s = planned.planned_at(self.slots[axis][i], mid + tau);
+                let (ps, vs, as_) = planned.state(s, ta + tau);
                 for k in 0..2 {
                     pk[k] += w * ps[k];
                     vk[k] += w * vs[k];
@@ -222,31 +222,6 @@ impl Shaper {
         }
     }
 
-    /// The index of the planned piece in force at `t` (None before the first or after the
-    /// last), asked through lookup slot `slot`.
-    #[inline(always)]
-    fn planned_at(&mut self, slot: usize, t: f64) -> Option<usize> {
-        let i = self.planned.in_force(slot, t);
-        self.planned.get(i).filter(|s| s.t0_s <= t).map(|_| i)
-    }
-
-    /// Planned position, velocity and acceleration at `t` on piece `i` (extended as a
-    /// polynomial), or at rest before the first / after the last piece.
-    #[inline(always)]
-    fn planned_state(&self, i: Option<usize>, t: f64) -> (Vec3, Vec3, Vec3) {
-        match i.and_then(|i| self.planned.get(i)) {
-            Some(s) => s.at(t - s.t0_s),
-            None => {
-                let rest = |p: Vec3| (p, Vec3::zeros(), Vec3::zeros());
-                match (self.planned.front(), self.planned.back()) {
-                    (Some(first), _) if t < first.t0_s => rest(first.p),
-                    (_, Some(last)) => rest(last.end().0),
-                    _ => rest(Vec3::zeros()),
-                }
-            }
-        }
-    }
-
     /// Drops the planned pieces no pulse will look at again.
     fn drop_unneeded(&mut self) {
         while self.planned.len() > 1
@@ -264,6 +239,7 @@ impl Shaper {
 mod tests {
     use super::*;
     use crate::motion::Phase;
+    use crate::path::Vec3;
 
     /// A planned chain: from rest, accelerate along X, cruise, a corner into Y (velocity
     /// jump), decelerate to rest; a Z move meanwhile.

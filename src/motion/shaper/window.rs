@@ -8,6 +8,7 @@
 
 use super::pulses::MAX_PULSES;
 use crate::motion::Segment;
+use crate::path::Vec3;
 
 /// Dropped pieces are removed from the vector once there are at least this many.
 const COMPACT_MIN: usize = 64;
@@ -91,6 +92,31 @@ impl Window {
         i
     }
 
+    /// The index of the piece in force at `t` (None before the first or after the last),
+    /// asked for offset `k` as for [`Self::in_force`].
+    #[inline(always)]
+    pub fn planned_at(&mut self, k: usize, t: f64) -> Option<usize> {
+        let i = self.in_force(k, t);
+        self.get(i).filter(|s| s.t0_s <= t).map(|_| i)
+    }
+
+    /// Position, velocity and acceleration at `t` on piece `i` (extended as a polynomial),
+    /// or at rest before the first / after the last piece (Klipper's trapq).
+    #[inline(always)]
+    pub fn state(&self, i: Option<usize>, t: f64) -> (Vec3, Vec3, Vec3) {
+        match i.and_then(|i| self.get(i)) {
+            Some(s) => s.at(t - s.t0_s),
+            None => {
+                let rest = |p: Vec3| (p, Vec3::zeros(), Vec3::zeros());
+                match (self.front(), self.back()) {
+                    (Some(first), _) if t < first.t0_s => rest(first.p),
+                    (_, Some(last)) => rest(last.end().0),
+                    _ => rest(Vec3::zeros()),
+                }
+            }
+        }
+    }
+
     /// The index of the first piece ending after `t` (the piece in force at `t` if it has
     /// started), asked for offset `k` with `t` never decreasing, as for `next_start`.
     #[inline(always)]
@@ -108,7 +134,6 @@ impl Window {
 mod tests {
     use super::*;
     use crate::motion::Phase;
-    use crate::path::Vec3;
 
     fn piece(t0_s: f64, dt_s: f64) -> Segment {
         Segment {
