@@ -6,11 +6,9 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 corpus=${1:-../shared/corpus}
 machine=${2:-machines/kossel.yaml}
-out=target/corpus
-mkdir -p "$out"
+. scripts/corpus.sh
 cargo build --release --quiet
-one="$out/ps25_delta170_marlin2_bunny-big.gcode"
-[ -f "$one" ] || xz -dkc "$corpus/ps25_delta170_marlin2_bunny-big.gcode.xz" > "$one"
+one=$(corpus_file "$corpus/ps25_delta170_marlin2_bunny-big.gcode.xz")
 big="$out/bunny-x37.gcode"
 [ -f "$big" ] || for _ in $(seq 37); do cat "$one"; done > "$big"
 for f in "$one" "$big"; do
