@@ -94,8 +94,28 @@ impl Response {
     /// at its beginning.
     #[inline(always)]
     pub fn lag_at(&self, start: &Lag, a_c: Vec3, tau_s: f64) -> Lag {
-        let (s, c) = (self.omega_d * tau_s).sin_cos();
-        let decay = (-self.sigma * tau_s).exp();
+        self.lag_after(start, a_c, self.turn(tau_s))
+    }
+
+    /// What [`Self::lag_at`] needs of τ: sin and cos of ω_dτ, e^(−στ).
+    #[inline(always)]
+    fn turn(&self, tau_s: f64) -> Turn {
+        let (sin, cos) = (self.omega_d * tau_s).sin_cos();
+        Turn {
+            sin,
+            cos,
+            decay: (-self.sigma * tau_s).exp(),
+        }
+    }
+
+    /// [`Self::lag_at`] for the τ of `turn`.
+    #[inline(always)]
+    fn lag_after(&self, start: &Lag, a_c: Vec3, turn: Turn) -> Lag {
+        let Turn {
+            sin: s,
+            cos: c,
+            decay,
+        } = turn;
         // u = e − e_p with e_p = −a_c/ω², the lag the constant acceleration settles to.
         let e_p = a_c * (-1.0 / self.omega2);
         let u0 = start.e - e_p;
@@ -223,6 +243,19 @@ pub struct ActualPiece {
     pub jump: Vec3,
 }
 
+/// The exp and sin/cos of a duration τ ([`Response::turn`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Turn {
+    sin: f64,
+    cos: f64,
+    decay: f64,
+}
+
+/// Slots of [`DriveStage`]'s memo of [`Response::turn`] by piece duration: on the corpus's
+/// bunny 79 % of the pieces find their duration there with an input shaper (its pulses cut
+/// the moves at the same offsets) and 30 % without (docs/performance.md).
+const TURN_MEMO: usize = 4096;
+
 /// The drive as a stream: commanded pieces in, in time order; each with the lag at its
 /// start out. Cheap (one closed-form step per piece), so it runs sequentially ahead of the
 /// sampling.
@@ -232,17 +265,26 @@ pub struct DriveStage {
     lag: Lag,
     /// The previous piece's commanded end position and velocity.
     prev_end: Option<(Vec3, Vec3)>,
+    /// [`Response::turn`] of recent pieces' durations, by the duration's bits (a slot
+    /// holds a duration and its turn, so what it gives is what the turn computes).
+    memo: Box<[(u64, Turn)]>,
 }
 
 impl DriveStage {
     pub fn new(drive: &Drive) -> DriveStage {
+        let response = match drive {
+            Drive::Rigid => None,
+            Drive::Spring(s) => Some(Response::new(s)),
+        };
+        let memo = match &response {
+            Some(r) => vec![(0.0f64.to_bits(), r.turn(0.0)); TURN_MEMO].into_boxed_slice(),
+            None => Box::default(),
+        };
         DriveStage {
-            response: match drive {
-                Drive::Rigid => None,
-                Drive::Spring(s) => Some(Response::new(s)),
-            },
+            response,
             lag: Lag::default(),
             prev_end: None,
+            memo,
         }
     }
 
@@ -266,7 +308,12 @@ impl DriveStage {
             jump,
         };
         if let Some(r) = &self.response {
-            self.lag = r.lag_at(&self.lag, seg.a, seg.dt_s);
+            let bits = seg.dt_s.to_bits();
+            let slot = &mut self.memo[(bits ^ (bits >> 17) ^ (bits >> 31)) as usize % TURN_MEMO];
+            if slot.0 != bits {
+                *slot = (bits, r.turn(seg.dt_s));
+            }
+            self.lag = r.lag_after(&self.lag, seg.a, slot.1);
         }
         self.prev_end = Some(seg.end());
         piece
@@ -323,6 +370,34 @@ mod tests {
             a: x(a),
             line: 1,
             phase: Phase::Cruise,
+        }
+    }
+
+    #[test]
+    fn the_stage_gives_the_closed_form_bit_for_bit_through_its_memo() {
+        // Durations that repeat (found in the memo) and 10,000 distinct ones (slots
+        // overwritten), against `lag_at` from each piece's start.
+        let spring = Spring {
+            frequency_hz: 47.0,
+            damping_ratio: 0.07,
+        };
+        let r = Response::new(&spring);
+        let mut stage = DriveStage::new(&Drive::Spring(spring));
+        let (mut t, mut p, mut expected) = (0.0, 0.0, Lag::default());
+        for k in 0..30_000u32 {
+            let dt = if k % 3 == 0 {
+                1e-3 * f64::from(k % 7 + 1)
+            } else {
+                1e-3 + 1e-7 * f64::from(k)
+            };
+            let a = if k % 2 == 0 { 3000.0 } else { -2000.0 };
+            let s = piece(t, dt, p, 0.0, a);
+            let got = stage.push(&s);
+            assert_eq!(got.lag, expected, "piece {k}");
+            expected = r.lag_at(&got.lag, s.a, dt);
+            (t, p) = (t + dt, s.end().0.x);
+            // The next piece starts at rest on the command: the lag's rate takes the jump.
+            expected.de += s.end().1;
         }
     }
 
