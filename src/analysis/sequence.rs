@@ -195,6 +195,7 @@ impl Sequencer {
     }
 
     /// The next actual piece: the held one can now be sampled.
+    #[inline(always)]
     fn actual(&mut self, piece: ActualPiece) {
         let dt = piece.commanded.dt_s;
         if let Some((held, prev_dt)) = self.held.take() {
@@ -215,6 +216,7 @@ impl Sequencer {
 
     /// Adds the sampling work of `piece`, whose successor starts with `jump_out` and lasts
     /// `next_dt`.
+    #[inline(always)]
     fn emit(
         &mut self,
         piece: ActualPiece,
