@@ -297,14 +297,9 @@ impl Grid<'_> {
         let seg = &self.work.piece.commanded;
         let ring = self.response.ringing(&self.work.piece.lag, seg.a, ta);
         let ((pa, va, _), (pb, vb, _)) = (seg.at(ta), seg.at(tb));
-        let mut b = StateBox {
-            pos_mm: [Interval::point(0.0); 3],
-            vel_mm_s: [Interval::point(0.0); 3],
-            acc_mm_s2: [Interval::point(0.0); 3],
-        };
         let slack =
             |x: Interval, ring: f64| x.widen(STATE_SLACK + STATE_SLACK_REL * (x.mag() + ring));
-        for i in 0..3 {
+        let pos = |i: usize| {
             let mut pos = Interval::hull(pa[i], pb[i]);
             // The parabola's vertex, where the velocity changes sign inside the run.
             if seg.a[i] != 0.0 {
@@ -314,11 +309,17 @@ impl Grid<'_> {
                     pos = pos.join(Interval::point(pv));
                 }
             }
-            b.pos_mm[i] = slack(pos + ring.e_p[i], ring.u[i]).widen(ring.u[i]);
-            b.vel_mm_s[i] = slack(Interval::hull(va[i], vb[i]), ring.du[i]).widen(ring.du[i]);
-            b.acc_mm_s2[i] = slack(Interval::around(ring.acc_p[i], ring.acc[i]), ring.acc[i]);
+            slack(pos + ring.e_p[i], ring.u[i]).widen(ring.u[i])
+        };
+        StateBox {
+            pos_mm: std::array::from_fn(pos),
+            vel_mm_s: std::array::from_fn(|i| {
+                slack(Interval::hull(va[i], vb[i]), ring.du[i]).widen(ring.du[i])
+            }),
+            acc_mm_s2: std::array::from_fn(|i| {
+                slack(Interval::around(ring.acc_p[i], ring.acc[i]), ring.acc[i])
+            }),
         }
-        b
     }
 }
 
