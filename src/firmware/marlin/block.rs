@@ -27,6 +27,9 @@ pub struct Block {
     /// `max_entry_speed_sqr` and `entry_speed_sqr`, (mm/s)².
     pub max_entry_sqr: f64,
     pub entry_sqr: f64,
+    /// The entry the last reverse pass gave it, before the forward pass (NaN before the
+    /// first), (mm/s)²: where a pass gives the same, it can stop (`Lookahead`).
+    pub reverse_sqr: f64,
 }
 
 impl Block {
@@ -149,6 +152,7 @@ pub fn populate(
         accel_mm_s2: accel_steps / steps_per_mm,
         max_entry_sqr: max_entry * max_entry,
         entry_sqr: mps * mps,
+        reverse_sqr: f64::NAN,
     })
 }
 

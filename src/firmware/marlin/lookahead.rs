@@ -66,30 +66,47 @@ impl Lookahead {
 
     /// The reverse and forward passes (`reverse_pass_kernel`, `forward_pass_kernel`); the
     /// newest block must be able to stop at `MINIMUM_PLANNER_SPEED`.
+    ///
+    /// A block's reverse entry depends only on the blocks after it, so where the reverse
+    /// pass gives a block the value it gave it last time, the blocks before it keep theirs
+    /// and their final entries: the passes stop there and the forward pass starts after it
+    /// (as Marlin's `block_buffer_planned` spares it replanning what cannot change). The
+    /// entries are those of full passes, bit for bit.
     fn recalculate(&mut self) {
         let first = self.first_free();
         let q = &mut self.queue;
         let mut next_entry = self.mps_sqr;
+        // The first block whose entry this call sets again.
+        let mut from = first;
         for k in (first..q.len()).rev() {
             let b = &mut q[k];
-            b.entry_sqr = b
+            let reverse = b
                 .max_entry_sqr
                 .min(next_entry + 2.0 * b.accel_mm_s2 * b.millimeters);
-            next_entry = b.entry_sqr;
-        }
-        let (front, back) = q.as_mut_slices();
-        let mut prev: Option<&Block> = None;
-        for (k, b) in front.iter_mut().chain(back.iter_mut()).enumerate() {
-            if k >= first.max(1)
-                && let Some(p) = prev
-                && p.entry_sqr < b.entry_sqr
-            {
-                let reach = p.entry_sqr + 2.0 * p.accel_mm_s2 * p.millimeters;
-                if reach < b.entry_sqr {
-                    b.entry_sqr = reach;
-                }
+            if reverse.to_bits() == b.reverse_sqr.to_bits() {
+                from = k + 1;
+                break;
             }
-            prev = Some(b);
+            (b.reverse_sqr, b.entry_sqr) = (reverse, reverse);
+            next_entry = reverse;
+        }
+        let start = from.max(first.max(1));
+        // The previous block's entry and the entry it can reach at its end.
+        let reach = |b: &Block| {
+            (
+                b.entry_sqr,
+                b.entry_sqr + 2.0 * b.accel_mm_s2 * b.millimeters,
+            )
+        };
+        let mut prev = q.get(start.wrapping_sub(1)).map(reach);
+        for b in q.range_mut(start.min(q.len())..) {
+            if let Some((entry, reach)) = prev
+                && entry < b.entry_sqr
+                && reach < b.entry_sqr
+            {
+                b.entry_sqr = reach;
+            }
+            prev = Some(reach(b));
         }
     }
 
@@ -111,5 +128,73 @@ impl Lookahead {
             self.pop(out);
         }
         self.busy = false;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The passes over every block not frozen (the plain form of `recalculate`).
+    fn full_passes(q: &mut VecDeque<Block>, first: usize, mps_sqr: f64) {
+        let mut next = mps_sqr;
+        for k in (first..q.len()).rev() {
+            let b = &mut q[k];
+            b.entry_sqr = b
+                .max_entry_sqr
+                .min(next + 2.0 * b.accel_mm_s2 * b.millimeters);
+            next = b.entry_sqr;
+        }
+        for k in first.max(1)..q.len() {
+            let (p, b) = (q[k - 1], q[k]);
+            let reach = p.entry_sqr + 2.0 * p.accel_mm_s2 * p.millimeters;
+            if p.entry_sqr < b.entry_sqr && reach < b.entry_sqr {
+                q[k].entry_sqr = reach;
+            }
+        }
+    }
+
+    #[test]
+    fn stopping_where_nothing_changes_gives_the_full_passes_bit_for_bit() {
+        let (mut seed, mut rand) = (7u64, 0.0);
+        let mut next = |lo: f64, hi: f64| {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            rand = (seed >> 11) as f64 / (1u64 << 53) as f64;
+            lo + (hi - lo) * rand
+        };
+        let mut la = Lookahead::new(16, 0.05);
+        for k in 0..20_000u64 {
+            la.make_room(&mut |_| {});
+            // Runs of equal blocks (a segmented line) and changes of speed and length.
+            let (mm, speed) = if k % 50 < 40 {
+                (0.5, 80.0)
+            } else {
+                (next(0.01, 5.0), next(1.0, 120.0))
+            };
+            let block = Block {
+                line: k,
+                from_steps: [0; 4],
+                to_steps: [0; 4],
+                step_events: 1,
+                millimeters: mm,
+                nominal_speed: speed,
+                nominal_rate: 1.0,
+                accel_steps_s2: 1.0,
+                accel_mm_s2: next(500.0, 3000.0),
+                max_entry_sqr: speed * speed * next(0.0, 1.0),
+                entry_sqr: 0.0025,
+                reverse_sqr: f64::NAN,
+            };
+            let mut full = la.queue.clone();
+            full.push_back(block);
+            full_passes(&mut full, la.first_free(), la.mps_sqr);
+            la.push(block);
+            let entries =
+                |q: &VecDeque<Block>| q.iter().map(|b| b.entry_sqr.to_bits()).collect::<Vec<_>>();
+            assert_eq!(entries(&la.queue), entries(&full), "block {k}");
+        }
+        assert!(la.busy);
     }
 }
