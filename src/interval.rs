@@ -136,13 +136,13 @@ impl Neg for Interval {
 /// intervals are NaN only from 0·∞, which a user of the bounds rules out by refusing huge
 /// or NaN inputs (`delta::bounds`).
 #[inline(always)]
-fn lesser(a: f64, b: f64) -> f64 {
+pub(crate) fn lesser(a: f64, b: f64) -> f64 {
     if a < b { a } else { b }
 }
 
 /// The greater of two numbers that are not NaN (see [`lesser`]).
 #[inline(always)]
-fn greater(a: f64, b: f64) -> f64 {
+pub(crate) fn greater(a: f64, b: f64) -> f64 {
     if a > b { a } else { b }
 }
 

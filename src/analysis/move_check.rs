@@ -10,7 +10,7 @@ use crate::motion::drive::{Drive, Response};
 use crate::path::Path;
 use crate::report::{MoveStats, NEAR_SINGULAR_RATIO, PathChecks, Problem, share};
 use crate::resample::{
-    Phase, PieceWork, SPARSE_MIN_SAMPLES, Sample, SampleSink, StateBox, peak_candidates,
+    Fit, Phase, PieceWork, SPARSE_MIN_SAMPLES, Sample, SampleSink, StateBox, peak_candidates,
     piece_samples, piece_states, sample_piece,
 };
 
@@ -33,6 +33,10 @@ pub const DENSE_ENV: &str = "DELTA_GCODE_DENSE";
 /// A move is seeded for a sparse evaluation (its peak candidates computed first) when one
 /// of its pieces lasts this many sampling periods: shorter pieces are sampled whole.
 const SEED_MIN_PERIODS: f64 = 64.0;
+
+/// A move of at most this many pieces is offered in the box of [`Fit::Swing`] at once; one
+/// of more, first in that of [`Fit::Envelope`] (docs/performance.md).
+const SWING_FIRST_PIECES: usize = 4;
 
 /// Checks moves against one machine, for the verdict and for `observer`. Shared between
 /// threads; each thread brings its own [`Scratch`].
@@ -209,11 +213,22 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
         if count < SPARSE_MIN_SAMPLES {
             return false;
         }
-        let mut states = piece_states(first, r, period_s);
-        for w in rest {
-            states = states.join(&piece_states(w, r, period_s));
+        let states = |fit: Fit| {
+            let mut states = piece_states(first, r, period_s, fit);
+            for w in rest {
+                states = states.join(&piece_states(w, r, period_s, fit));
+            }
+            states
+        };
+        // A move of few pieces gets the swing's box at once; one of many (an input
+        // shaper's), which the envelope's box lets go most of the time, only after that.
+        if works.len() <= SWING_FIRST_PIECES {
+            return sink.skip(&states(Fit::Swing), count);
         }
-        sink.skip(&states, count)
+        if sink.skip(&states(Fit::Envelope), count) {
+            return true;
+        }
+        sink.skip(&states(Fit::Swing), count)
     }
 
     /// Whether the report lists a move with these statistics: a problem, a motor asked

@@ -10,8 +10,11 @@
 //! and the actual acceleration −ω²e − 2ζω ė by 2ζω times the jump: a finite force where the
 //! rigid model has an impulse.
 
+mod swing;
+
 use super::{CONTINUITY_MM, Segment};
 use crate::path::Vec3;
+use swing::Windows;
 
 /// How the nozzle follows the commanded motion.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -47,19 +50,24 @@ pub struct Response {
     omega_d: f64,
     /// The step h of [`Self::walk`] set by [`Self::with_step`], s, and its transition matrix.
     step: Option<(f64, [[f64; 2]; 2])>,
+    /// The windows of [`Self::acceleration_range`].
+    windows: Windows,
 }
 
 impl Response {
     pub fn new(s: &Spring) -> Response {
         let omega = std::f64::consts::TAU * s.frequency_hz;
         let zeta = s.damping_ratio;
-        Response {
+        let mut r = Response {
             omega,
             omega2: omega * omega,
             sigma: zeta * omega,
             omega_d: omega * (1.0 - zeta * zeta).sqrt(),
             step: None,
-        }
+            windows: Windows::default(),
+        };
+        r.windows = Windows::new(&r);
+        r
     }
 
     /// The same response, with the transition matrix of [`Self::walk`] over `h_s` computed
@@ -239,6 +247,9 @@ pub struct ActualPiece {
     pub commanded: Segment,
     /// The lag at the start, after the junction's velocity jump.
     pub lag: Lag,
+    /// The lag at the end, before the next junction's jump: [`Response::lag_at`] at the
+    /// piece's duration (zero with the rigid model).
+    pub end: Lag,
     /// The commanded velocity jump at the start (the junction), mm/s.
     pub jump: Vec3,
 }
@@ -302,11 +313,7 @@ impl DriveStage {
         if self.response.is_some() {
             self.lag.de -= jump;
         }
-        let piece = ActualPiece {
-            commanded: *seg,
-            lag: self.lag,
-            jump,
-        };
+        let start = self.lag;
         if let Some(r) = &self.response {
             let bits = seg.dt_s.to_bits();
             let slot = &mut self.memo[(bits ^ (bits >> 17) ^ (bits >> 31)) as usize % TURN_MEMO];
@@ -316,7 +323,12 @@ impl DriveStage {
             self.lag = r.lag_after(&self.lag, seg.a, slot.1);
         }
         self.prev_end = Some(seg.end());
-        piece
+        ActualPiece {
+            commanded: *seg,
+            lag: start,
+            end: self.lag,
+            jump,
+        }
     }
 }
 

@@ -139,7 +139,9 @@ pub fn sample_piece(
         && out.whole_pieces()
     {
         let count = piece_samples(work, period_s);
-        if count >= SPARSE_MIN_SAMPLES && out.skip(&piece_states(work, r, period_s), count) {
+        if count >= SPARSE_MIN_SAMPLES
+            && out.skip(&piece_states(work, r, period_s, Fit::Swing), count)
+        {
             return;
         }
     }
@@ -191,15 +193,25 @@ pub fn piece_samples(work: &PieceWork, period_s: f64) -> u64 {
     1 + inside + u64::from(work.end_sample && t1 > t0)
 }
 
+/// How closely a box of a whole piece fits its actual accelerations.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Fit {
+    /// The lag's ringing envelope over the piece ([`Response::ringing`]): cheap.
+    Envelope,
+    /// The actual acceleration's swing over the piece ([`Response::acceleration_range`]):
+    /// about 280 instructions more a piece, and let go more often (docs/performance.md).
+    Swing,
+}
+
 /// A box holding the states of every sample [`sample_piece`] takes of `work` with the drive
 /// `response` (see [`piece_samples`]).
-pub fn piece_states(work: &PieceWork, response: &Response, period_s: f64) -> StateBox {
+pub fn piece_states(work: &PieceWork, response: &Response, period_s: f64, fit: Fit) -> StateBox {
     let grid = Grid {
         work,
         response,
         period_s,
     };
-    grid.span(0.0, work.piece.commanded.dt_s)
+    grid.span(0.0, work.piece.commanded.dt_s, fit)
 }
 
 /// The first grid index strictly after `t0`: the piece's first grid point inside.
@@ -287,18 +299,31 @@ impl Grid<'_> {
     /// A box holding the actual state at grid points `first..=last` ([`Self::span`]).
     pub(super) fn states(&self, first: i64, last: i64) -> StateBox {
         let tau = |k: i64| k as f64 * self.period_s - self.work.piece.commanded.t0_s;
-        self.span(tau(first), tau(last))
+        self.span(tau(first), tau(last), Fit::Envelope)
     }
 
     /// A box holding the actual state at every τ in [ta, tb] of the piece (s from its
     /// start): the commanded polynomial's range (its ends and, for the position, its
-    /// vertex) plus the lag's ringing from `ta` on ([`Response::ringing`]).
-    fn span(&self, ta: f64, tb: f64) -> StateBox {
-        let seg = &self.work.piece.commanded;
-        let ring = self.response.ringing(&self.work.piece.lag, seg.a, ta);
+    /// vertex) plus the lag's ringing from `ta` on ([`Response::ringing`]); with
+    /// [`Fit::Swing`], for the whole piece only (ta = 0, tb its duration), the
+    /// acceleration's swing over it instead ([`Response::acceleration_range`]).
+    fn span(&self, ta: f64, tb: f64, fit: Fit) -> StateBox {
+        let piece = &self.work.piece;
+        let seg = &piece.commanded;
         let ((pa, va, _), (pb, vb, _)) = (seg.at(ta), seg.at(tb));
-        let slack =
-            |x: Interval, ring: f64| x.widen(STATE_SLACK + STATE_SLACK_REL * (x.mag() + ring));
+        // The lag's ranges, and the sizes the slack is relative to.
+        let ring = self.response.ringing(&piece.lag, seg.a, ta);
+        let e: [Interval; 3] = std::array::from_fn(|i| Interval::around(ring.e_p[i], ring.u[i]));
+        let de: [Interval; 3] = std::array::from_fn(|i| Interval::around(0.0, ring.du[i]));
+        let acc = if fit == Fit::Swing {
+            self.response
+                .acceleration_range(&piece.lag, &piece.end, seg.a, seg.dt_s, ring.acc)
+        } else {
+            std::array::from_fn(|i| Interval::around(ring.acc_p[i], ring.acc[i]))
+        };
+        let slack = |x: Interval, lag: Interval| {
+            x.widen(STATE_SLACK + STATE_SLACK_REL * (x.mag() + lag.mag()))
+        };
         let pos = |i: usize| {
             let mut pos = Interval::hull(pa[i], pb[i]);
             // The parabola's vertex, where the velocity changes sign inside the run.
@@ -309,16 +334,12 @@ impl Grid<'_> {
                     pos = pos.join(Interval::point(pv));
                 }
             }
-            slack(pos + ring.e_p[i], ring.u[i]).widen(ring.u[i])
+            slack(pos + e[i], e[i])
         };
         StateBox {
             pos_mm: std::array::from_fn(pos),
-            vel_mm_s: std::array::from_fn(|i| {
-                slack(Interval::hull(va[i], vb[i]), ring.du[i]).widen(ring.du[i])
-            }),
-            acc_mm_s2: std::array::from_fn(|i| {
-                slack(Interval::around(ring.acc_p[i], ring.acc[i]), ring.acc[i])
-            }),
+            vel_mm_s: std::array::from_fn(|i| slack(Interval::hull(va[i], vb[i]) + de[i], de[i])),
+            acc_mm_s2: std::array::from_fn(|i| slack(acc[i], acc[i])),
         }
     }
 }

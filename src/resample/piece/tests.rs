@@ -22,6 +22,7 @@ fn work(s: Segment, jump: Vec3, kicks: Kicks, end_sample: bool) -> PieceWork {
         piece: ActualPiece {
             commanded: s,
             lag: Lag::default(),
+            end: Lag::default(),
             jump,
         },
         kicks,
@@ -183,13 +184,21 @@ fn ringing_piece() -> (PieceWork, Response) {
                 e: Vec3::new(0.02, -0.01, 0.0),
                 de: Vec3::new(-4.0, 2.5, 0.3),
             },
+            end: Lag::default(),
             jump: Vec3::zeros(),
         },
         kicks: Kicks::default(),
         end_sample: false,
         corner_until_s: 12.35,
     };
-    (w, r)
+    (with_end(w, &r), r)
+}
+
+/// `w` with the lag at its end that the drive stage gives it.
+fn with_end(mut w: PieceWork, r: &Response) -> PieceWork {
+    let p = &mut w.piece;
+    p.end = r.lag_at(&p.lag, p.commanded.a, p.commanded.dt_s);
+    w
 }
 
 /// A sink that skips the runs `skip` says to, recording what it was asked; offered
@@ -271,21 +280,44 @@ fn every_sample_of_a_run_lies_in_its_box_and_skipped_runs_leave_the_rest_bit_for
 #[test]
 fn a_whole_piece_box_holds_every_sample_and_counts_them() {
     let (w, r) = ringing_piece();
-    // With its end sample, starting on a grid point, and a piece with no grid point.
+    // With its end sample, starting on a grid point, a piece with no grid point, and
+    // pieces shorter than half a swing, with and without their end sample.
     let on_grid = PieceWork {
         end_sample: true,
         ..w
     };
-    let mut short = w;
-    short.piece.commanded.t0_s = 12.3452;
-    short.piece.commanded.dt_s = 0.0003;
+    let cut = |t0_s: f64, dt_s: f64, end_sample: bool| {
+        let mut c = w;
+        c.piece.commanded.t0_s = t0_s;
+        c.piece.commanded.dt_s = dt_s;
+        c.end_sample = end_sample;
+        with_end(c, &r)
+    };
+    let short = cut(12.3452, 0.0003, false);
     let mut at_grid = w;
     at_grid.piece.commanded.t0_s = 12.345;
+    let swings = [cut(12.3452, 0.0074, false), cut(12.3452, 0.0091, true)];
     let contains = |i: Interval, x: f64| i.lo <= x && x <= i.hi;
+    for w in &swings {
+        // Tighter than the ringing's envelope over the piece.
+        let (whole, envelope) = (
+            piece_states(w, &r, TS, Fit::Swing),
+            Grid {
+                work: w,
+                response: &r,
+                period_s: TS,
+            }
+            .span(0.0, w.piece.commanded.dt_s, Fit::Envelope),
+        );
+        for k in 0..2 {
+            let width = |i: Interval| i.hi - i.lo;
+            assert!(width(whole.acc_mm_s2[k]) < 0.8 * width(envelope.acc_mm_s2[k]));
+        }
+    }
     let mut shorts = 0;
-    for w in [w, on_grid, short, at_grid] {
+    for w in [w, on_grid, short, at_grid, swings[0], swings[1]] {
         let dense = samples(&w, Some(&r));
-        let (b, count) = (piece_states(&w, &r, TS), piece_samples(&w, TS));
+        let (b, count) = (piece_states(&w, &r, TS, Fit::Swing), piece_samples(&w, TS));
         assert_eq!(count, dense.len() as u64);
         for s in &dense {
             for k in 0..3 {

@@ -1,0 +1,250 @@
+//! How far the actual acceleration swings over a whole piece, from the lag at both its
+//! ends: much tighter than the ringing's envelope ([`Response::ringing`]) over a piece that
+//! lasts less than a swing, which on the corpus's bunny is most of them
+//! (docs/performance.md, "Fifth session").
+
+use super::{Lag, Response};
+use crate::interval::{Interval, greater, lesser};
+use crate::path::Vec3;
+
+/// The first half damped period of a piece, π/ω_d, is cut into this many windows; the
+/// rest of a longer piece gets the ringing's envelope from there on. Instructions of
+/// `check` on the first 5 MB of the corpus's bunny (default drive / MZV shaper): 2 windows
+/// 2.169 / 4.977 G, 3 windows 2.157 / 4.960 G, 4 windows 2.186 / 4.968 G
+/// (docs/performance.md).
+pub const WINDOWS: usize = 3;
+
+/// What [`Response::acceleration_range`] needs of the spring, computed once per response:
+/// the windows' length, the transition matrix of the lag's free part over it (as
+/// [`super::LagWalk`] uses) and the decay e^(−σ·k·step) at each window's start.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(super) struct Windows {
+    step_s: f64,
+    turn: [[f64; 2]; 2],
+    decay: [f64; WINDOWS + 1],
+}
+
+/// ω²L²/8 of a window of length L (see [`Range::window`]).
+#[inline(always)]
+fn curve(r: &Response, length_s: f64) -> f64 {
+    r.omega2 * length_s * length_s * 0.125
+}
+
+impl Windows {
+    pub(super) fn new(r: &Response) -> Windows {
+        let step_s = std::f64::consts::PI / r.omega_d / WINDOWS as f64;
+        Windows {
+            step_s,
+            turn: r.transition(step_s),
+            decay: std::array::from_fn(|k| (-r.sigma * step_s * k as f64).exp()),
+        }
+    }
+}
+
+/// Where the actual acceleration's free part w stands at a window's end: its value
+/// and its rate.
+#[derive(Clone, Copy)]
+struct End {
+    w: f64,
+    rate: f64,
+}
+
+/// The range of w over the windows so far.
+#[derive(Clone, Copy)]
+struct Range {
+    lo: f64,
+    hi: f64,
+}
+
+impl Range {
+    /// A window from `a` to `b`, where w's envelope is at most `amplitude` and its second
+    /// derivative at most `amplitude`·ω², its length L given as `curve` = ω²L²/8.
+    ///
+    /// A damped sinusoid's extrema lie π/ω_d apart (the zeros of its rate, a damped
+    /// sinusoid of the same frequency), so a window shorter than that holds at most one,
+    /// and it holds one exactly when the rate changes sign between its ends: a maximum
+    /// where it goes from positive to negative, a minimum the other way. The extremum is
+    /// at most the envelope, and, the rate being 0 there and the second derivative at most
+    /// M = `amplitude`·ω², at most M·d²/2 beyond an end d away: beyond the nearer end by at
+    /// most M·L²/8.
+    #[inline(always)]
+    fn window(&mut self, a: End, b: End, amplitude: f64, curve: f64) {
+        let beyond = amplitude * curve;
+        if a.rate > 0.0 && b.rate <= 0.0 {
+            let top = greater(a.w, b.w) + beyond;
+            self.hi = greater(self.hi, lesser(top, amplitude));
+        } else if a.rate < 0.0 && b.rate >= 0.0 {
+            let bottom = lesser(a.w, b.w) - beyond;
+            self.lo = lesser(self.lo, greater(bottom, -amplitude));
+        }
+        self.lo = lesser(self.lo, b.w);
+        self.hi = greater(self.hi, b.w);
+    }
+}
+
+impl Response {
+    /// The range of the actual acceleration (mm/s², per axis) over a whole commanded piece
+    /// of acceleration `a_c` lasting `dt_s`, from `start`, the lag at its beginning, to
+    /// `end`, the lag at its end ([`Self::lag_at`] at `dt_s`); `envelope` is the ringing's
+    /// acceleration amplitude from the start ([`Self::ringing`] at 0, `acc`).
+    ///
+    /// The actual acceleration is a_c − w, with w = ω²u + 2σu̇ a damped sinusoid whose rate
+    /// is ẇ = ω²u̇ − 2σw. The first half damped period is cut into [`WINDOWS`] windows,
+    /// their ends reached by a fixed turn of (u, u̇), the last one's end being `end`: over
+    /// each, w's range is its ends' hull, widened where the window holds an extremum
+    /// ([`Range::window`]); a piece longer than that gets the envelope from there on.
+    pub fn acceleration_range(
+        &self,
+        start: &Lag,
+        end: &Lag,
+        a_c: Vec3,
+        dt_s: f64,
+        envelope: Vec3,
+    ) -> [Interval; 3] {
+        let Windows {
+            step_s,
+            turn: [[m00, m01], [m10, m11]],
+            decay,
+        } = &self.windows;
+        let (w2, two_sigma, to_e) = (self.omega2, 2.0 * self.sigma, -1.0 / self.omega2);
+        let at = |u: f64, du: f64| {
+            let w = w2 * u + two_sigma * du;
+            End {
+                w,
+                rate: w2 * du - two_sigma * w,
+            }
+        };
+        // Windows [k·step, (k + 1)·step], the last one ending at the piece's end, unless the
+        // piece outlasts them all (then the envelope from there on).
+        let tail = dt_s > WINDOWS as f64 * step_s;
+        let n = if tail {
+            WINDOWS
+        } else {
+            ((dt_s / step_s) as usize + 1).min(WINDOWS)
+        };
+        let full = curve(self, *step_s);
+        let last = if tail {
+            full
+        } else {
+            curve(self, dt_s - (n - 1) as f64 * step_s)
+        };
+        let mut out = [Interval::point(0.0); 3];
+        for (i, out) in out.iter_mut().enumerate() {
+            let e_p = a_c[i] * to_e;
+            let (mut u, mut du) = (start.e[i] - e_p, start.de[i]);
+            let mut a = at(u, du);
+            let mut w = Range { lo: a.w, hi: a.w };
+            for &decay in &decay[..n - 1] {
+                (u, du) = (m00 * u + m01 * du, m10 * u + m11 * du);
+                let b = at(u, du);
+                w.window(a, b, envelope[i] * decay, full);
+                a = b;
+            }
+            let b = if tail {
+                at(m00 * u + m01 * du, m10 * u + m11 * du)
+            } else {
+                at(end.e[i] - e_p, end.de[i])
+            };
+            w.window(a, b, envelope[i] * decay[n - 1], last);
+            if tail {
+                let peak = envelope[i] * decay[WINDOWS];
+                w.lo = lesser(w.lo, -peak);
+                w.hi = greater(w.hi, peak);
+            }
+            *out = Interval {
+                lo: a_c[i] - w.hi,
+                hi: a_c[i] - w.lo,
+            };
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::Spring;
+    use super::*;
+    use proptest::prelude::*;
+
+    fn response(frequency_hz: f64, damping_ratio: f64) -> Response {
+        Response::new(&Spring {
+            frequency_hz,
+            damping_ratio,
+        })
+    }
+
+    /// The actual acceleration every `h` s of the piece and at its end, by the closed
+    /// form.
+    fn dense(r: &Response, start: &Lag, a_c: Vec3, dt_s: f64, h: f64) -> Vec<Vec3> {
+        let n = (dt_s / h).ceil() as usize;
+        (0..=n)
+            .map(|k| r.acceleration(&r.lag_at(start, a_c, (k as f64 * h).min(dt_s))))
+            .collect()
+    }
+
+    fn range(r: &Response, start: &Lag, a_c: Vec3, dt_s: f64) -> [Interval; 3] {
+        let envelope = r.ringing(start, a_c, 0.0).acc;
+        r.acceleration_range(start, &r.lag_at(start, a_c, dt_s), a_c, dt_s, envelope)
+    }
+
+    proptest! {
+        /// Every instant of the piece, densely (1/50 of a window), lies in the range; a
+        /// swing that forgot an extremum inside a window, took a window of a whole half
+        /// period, or mixed up a rate's sign, fails.
+        #[test]
+        fn the_range_holds_the_acceleration_at_every_instant(
+            f in 20.0..120.0f64, zeta in 0.0..0.5f64,
+            e in proptest::array::uniform3(-0.05..0.05f64),
+            de in proptest::array::uniform3(-60.0..60.0f64),
+            a_c in proptest::array::uniform3(-5000.0..5000.0f64),
+            periods in 0.0..3.0f64,
+        ) {
+            let r = response(f, zeta);
+            let start = Lag { e: Vec3::from(e), de: Vec3::from(de) };
+            let a_c = Vec3::from(a_c);
+            let dt_s = periods * r.period_s();
+            let got = range(&r, &start, a_c, dt_s);
+            let h = r.windows.step_s / 50.0;
+            for acc in dense(&r, &start, a_c, dt_s, h) {
+                for i in 0..3 {
+                    let slack = 1e-9 * (1.0 + acc[i].abs());
+                    prop_assert!(acc[i] >= got[i].lo - slack && acc[i] <= got[i].hi + slack,
+                        "axis {i}: {} outside {:?}", acc[i], got[i]);
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn over_a_short_piece_the_range_is_the_swing_not_the_envelope() {
+        // A corner's ringing (a velocity jump of 30 mm/s on X) through the default drive,
+        // over pieces of 2, 5 and 9 ms and one of 60 ms: within 5 % of the dense samples'
+        // range over the short ones, where the envelope is up to twice as wide.
+        let r = response(51.23, 0.1);
+        let start = Lag {
+            e: Vec3::zeros(),
+            de: Vec3::new(-30.0, 0.0, 0.0),
+        };
+        let a_c = Vec3::new(3000.0, 0.0, 0.0);
+        let envelope = r.ringing(&start, a_c, 0.0).acc[0];
+        for (dt_s, tight) in [(0.002, true), (0.005, true), (0.009, true), (0.06, false)] {
+            let got = range(&r, &start, a_c, dt_s)[0];
+            let samples = dense(&r, &start, a_c, dt_s, 1e-6);
+            let lo = samples.iter().map(|a| a[0]).fold(f64::INFINITY, f64::min);
+            let hi = samples
+                .iter()
+                .map(|a| a[0])
+                .fold(f64::NEG_INFINITY, f64::max);
+            assert!(got.lo <= lo && got.hi >= hi, "{dt_s}: {got:?} [{lo}, {hi}]");
+            let width = got.hi - got.lo;
+            if tight {
+                assert!(width <= (hi - lo) * 1.05, "{dt_s}: {width} {}", hi - lo);
+                assert!(width < 2.0 * envelope * 0.6, "{dt_s}: {width} {envelope}");
+            } else {
+                // Past the windows the envelope from π/ω_d on.
+                let tail = envelope * r.windows.decay[WINDOWS];
+                assert!(width >= 2.0 * tail * 0.999);
+            }
+        }
+    }
+}
