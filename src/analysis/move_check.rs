@@ -186,7 +186,7 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
             return true;
         }
         for work in works {
-            let seg = &work.piece.commanded;
+            let seg = &work.commanded;
             if seg.dt_s > MAX_SAMPLES_PER_PIECE * period_s {
                 if let Some(r) = sink.out.get_mut(slot) {
                     self.check_ends_only(seg, &mut r.stats);
@@ -205,11 +205,14 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
             return false;
         };
         let period_s = self.machine.sampling.period_s;
-        let sampled = |w: &PieceWork| w.piece.commanded.dt_s <= MAX_SAMPLES_PER_PIECE * period_s;
-        if !works.iter().all(sampled) {
-            return false;
+        // In one pass: whether every piece is sampled, and how many samples.
+        let mut count = 0;
+        for w in works {
+            if w.commanded.dt_s > MAX_SAMPLES_PER_PIECE * period_s {
+                return false;
+            }
+            count += piece_samples(w, period_s);
         }
-        let count: u64 = works.iter().map(|w| piece_samples(w, period_s)).sum();
         if count < SPARSE_MIN_SAMPLES {
             return false;
         }
@@ -247,7 +250,7 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
         let r = self.response.as_ref().filter(|_| self.sparse)?;
         if !works
             .iter()
-            .any(|w| w.piece.commanded.dt_s >= SEED_MIN_PERIODS * period_s)
+            .any(|w| w.commanded.dt_s >= SEED_MIN_PERIODS * period_s)
         {
             return None;
         }
@@ -255,7 +258,7 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
         // Only pieces that are sampled: a candidate must be one of the move's samples.
         let sampled = works
             .iter()
-            .filter(|w| w.piece.commanded.dt_s <= MAX_SAMPLES_PER_PIECE * period_s);
+            .filter(|w| w.commanded.dt_s <= MAX_SAMPLES_PER_PIECE * period_s);
         for w in sampled {
             peak_candidates(w, r, period_s, |pos, vel, acc| {
                 if let Ok(s) = self.model.evaluate(pos, vel, acc) {

@@ -228,9 +228,9 @@ impl Sequencer {
         let seg = piece.commanded;
         let jumps = |j: Vec3| j.norm() > JUMP_MIN_MM_S;
         let (kicks, end_sample) = match self.response {
-            Some(_) => (Kicks::default(), jumps(jump_out)),
+            Some(_) => (None, jumps(jump_out)),
             None => (
-                Kicks::around(
+                Some(Kicks::around(
                     seg.t0_s,
                     seg.dt_s,
                     piece.jump,
@@ -238,7 +238,7 @@ impl Sequencer {
                     jump_out,
                     next_dt,
                     self.period_s,
-                ),
+                )),
                 jumps(jump_out) || accel_step,
             ),
         };
@@ -248,12 +248,7 @@ impl Sequencer {
                 None => f64::NEG_INFINITY,
             };
         }
-        let work = PieceWork {
-            piece,
-            kicks,
-            end_sample,
-            corner_until_s: self.corner_until_s,
-        };
+        let work = PieceWork::new(&piece, kicks, end_sample, self.corner_until_s);
         let line = seg.line;
         self.merge_checked_into_open();
         let starts_group = self.batch.moves.last().is_none_or(|m| m.line != line);
@@ -385,7 +380,7 @@ mod tests {
         assert_eq!(whole.len(), 1);
         let b = &whole[0];
         for w in b.pieces.windows(2) {
-            let (a, c) = (w[0].piece.commanded, w[1].piece.commanded);
+            let (a, c) = (w[0].commanded, w[1].commanded);
             assert!((a.t1_s() - c.t0_s).abs() < 1e-9, "{a:?} {c:?}");
             assert!((a.end().0 - c.p).norm() < 1e-9);
         }
@@ -398,7 +393,7 @@ mod tests {
         );
         for m in &b.moves {
             for p in &b.pieces[m.first..m.first + m.count] {
-                assert_eq!(p.piece.commanded.line, m.line);
+                assert_eq!(p.commanded.line, m.line);
             }
         }
         // The arc (line 43) has many chords, all in its group; the move out of reach

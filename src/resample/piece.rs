@@ -6,7 +6,8 @@
 
 use super::{Phase, Sample, SampleSink, StateBox};
 use crate::interval::Interval;
-use crate::motion::drive::{ActualPiece, LagWalk, Response};
+use crate::motion::Segment;
+use crate::motion::drive::{ActualPiece, Lag, LagWalk, Response};
 use crate::path::Vec3;
 
 /// A velocity jump smaller than this (mm/s) is rounding, not a junction: two collinear
@@ -73,13 +74,51 @@ impl Kicks {
 /// One piece of the actual motion, with what its sampling needs to know of its neighbours.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PieceWork {
-    pub piece: ActualPiece,
-    /// The rigid model's junction impulses (zero with a drive response).
-    pub kicks: Kicks,
+    pub commanded: Segment,
+    /// The drive's lag at the start (zero with the rigid model).
+    pub lag: Lag,
+    /// What the piece's end holds: the lag there, or the rigid model's impulses.
+    pub edge: Edge,
     /// Sample the left limit at the end: the state jumps there.
     pub end_sample: bool,
     /// Until this time the samples are in a `Corner`: just after a junction's jump.
     pub corner_until_s: f64,
+}
+
+/// With a drive response, the lag at a piece's end ([`ActualPiece::end`]); with the rigid
+/// model, the junctions' impulses around it. One or the other, in the same space: a batch
+/// holds thousands of pieces.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Edge {
+    End(Lag),
+    Kicks(Kicks),
+}
+
+impl PieceWork {
+    /// The work of `piece`, with the drive's lag at its end (`kicks` None) or the rigid
+    /// model's impulses.
+    pub fn new(
+        piece: &ActualPiece,
+        kicks: Option<Kicks>,
+        end_sample: bool,
+        corner_until_s: f64,
+    ) -> PieceWork {
+        PieceWork {
+            commanded: piece.commanded,
+            lag: piece.lag,
+            edge: kicks.map_or(Edge::End(piece.end), Edge::Kicks),
+            end_sample,
+            corner_until_s,
+        }
+    }
+
+    /// The rigid model's impulses (none with a drive response).
+    fn kicks(&self) -> Kicks {
+        match self.edge {
+            Edge::Kicks(k) => k,
+            Edge::End(_) => Kicks::default(),
+        }
+    }
 }
 
 /// Samples of `work` (see the module doc) on the grid of `period_s`, which must be positive
@@ -93,7 +132,7 @@ pub fn sample_piece(
     if !(period_s > 0.0 && period_s.is_finite()) {
         return;
     }
-    let seg = &work.piece.commanded;
+    let seg = &work.commanded;
     let (t0, t1) = (seg.t0_s, seg.t1_s());
     // With a drive, the phase from the corner's end; without, from the impulses.
     let phase = |t: f64, kick: bool| {
@@ -110,18 +149,15 @@ pub fn sample_piece(
             Some(r) => {
                 // At the start the lag is the piece's own (what `lag_at` gives at τ = 0).
                 let lag = if tau == 0.0 {
-                    work.piece.lag
+                    work.lag
                 } else {
-                    r.lag_at(&work.piece.lag, seg.a, tau)
+                    r.lag_at(&work.lag, seg.a, tau)
                 };
                 (p + lag.e, v + lag.de, r.acceleration(&lag), false)
             }
             None => {
-                let k = if left {
-                    work.kicks.end
-                } else {
-                    work.kicks.at(t)
-                };
+                let kicks = work.kicks();
+                let k = if left { kicks.end } else { kicks.at(t) };
                 (p, v, a + k, k != Vec3::zeros())
             }
         };
@@ -152,7 +188,7 @@ pub fn sample_piece(
         // sample.
         Some(r) if (k as f64 * period_s) < t1 => {
             let t = k as f64 * period_s;
-            let mut walk = r.walk(&work.piece.lag, seg.a, t - t0, period_s);
+            let mut walk = r.walk(&work.lag, seg.a, t - t0, period_s);
             // Smallest k with k·Ts ≥ t1: the grid points inside are k..end.
             let end = first_grid_index(t1, period_s);
             let grid = Grid {
@@ -187,7 +223,7 @@ pub fn sample_piece(
 /// How many samples [`sample_piece`] takes of `work`: its start, the grid points inside,
 /// its end when asked.
 pub fn piece_samples(work: &PieceWork, period_s: f64) -> u64 {
-    let seg = &work.piece.commanded;
+    let seg = &work.commanded;
     let (t0, t1) = (seg.t0_s, seg.t1_s());
     let inside = (first_grid_index(t1, period_s) - first_inside(t0, period_s)).max(0) as u64;
     1 + inside + u64::from(work.end_sample && t1 > t0)
@@ -211,7 +247,7 @@ pub fn piece_states(work: &PieceWork, response: &Response, period_s: f64, fit: F
         response,
         period_s,
     };
-    grid.span(0.0, work.piece.commanded.dt_s, fit)
+    grid.span(0.0, work.commanded.dt_s, fit)
 }
 
 /// The first grid index strictly after `t0`: the piece's first grid point inside.
@@ -251,7 +287,7 @@ impl Grid<'_> {
     /// Samples grid points `k..end`, `walk` at `k`, and leaves `walk` at `end`.
     #[inline(always)]
     fn sample(&self, walk: &mut LagWalk, k: i64, end: i64, out: &mut impl SampleSink) {
-        let seg = &self.work.piece.commanded;
+        let seg = &self.work.commanded;
         for k in k..end {
             let t = k as f64 * self.period_s;
             let (p, v, _) = seg.at(t - seg.t0_s);
@@ -298,7 +334,7 @@ impl Grid<'_> {
 
     /// A box holding the actual state at grid points `first..=last` ([`Self::span`]).
     pub(super) fn states(&self, first: i64, last: i64) -> StateBox {
-        let tau = |k: i64| k as f64 * self.period_s - self.work.piece.commanded.t0_s;
+        let tau = |k: i64| k as f64 * self.period_s - self.work.commanded.t0_s;
         self.span(tau(first), tau(last), Fit::Envelope)
     }
 
@@ -308,22 +344,12 @@ impl Grid<'_> {
     /// [`Fit::Swing`], for the whole piece only (ta = 0, tb its duration), the
     /// acceleration's swing over it instead ([`Response::acceleration_range`]).
     fn span(&self, ta: f64, tb: f64, fit: Fit) -> StateBox {
-        let piece = &self.work.piece;
-        let seg = &piece.commanded;
+        let work = self.work;
+        let seg = &work.commanded;
         let ((pa, va, _), (pb, vb, _)) = (seg.at(ta), seg.at(tb));
-        // The lag's ranges, and the sizes the slack is relative to.
-        let ring = self.response.ringing(&piece.lag, seg.a, ta);
-        let e: [Interval; 3] = std::array::from_fn(|i| Interval::around(ring.e_p[i], ring.u[i]));
-        let de: [Interval; 3] = std::array::from_fn(|i| Interval::around(0.0, ring.du[i]));
-        let acc = if fit == Fit::Swing {
-            self.response
-                .acceleration_range(&piece.lag, &piece.end, seg.a, seg.dt_s, ring.acc)
-        } else {
-            std::array::from_fn(|i| Interval::around(ring.acc_p[i], ring.acc[i]))
-        };
-        let slack = |x: Interval, lag: Interval| {
-            x.widen(STATE_SLACK + STATE_SLACK_REL * (x.mag() + lag.mag()))
-        };
+        let ring = self.response.ringing(&work.lag, seg.a, ta);
+        let slack =
+            |x: Interval, ring: f64| x.widen(STATE_SLACK + STATE_SLACK_REL * (x.mag() + ring));
         let pos = |i: usize| {
             let mut pos = Interval::hull(pa[i], pb[i]);
             // The parabola's vertex, where the velocity changes sign inside the run.
@@ -334,12 +360,20 @@ impl Grid<'_> {
                     pos = pos.join(Interval::point(pv));
                 }
             }
-            slack(pos + e[i], e[i])
+            slack(pos + ring.e_p[i], ring.u[i]).widen(ring.u[i])
+        };
+        let acc = match (fit, &work.edge) {
+            (Fit::Swing, Edge::End(end)) => self
+                .response
+                .acceleration_range(&work.lag, end, seg.a, seg.dt_s, ring.acc),
+            _ => std::array::from_fn(|i| Interval::around(ring.acc_p[i], ring.acc[i])),
         };
         StateBox {
             pos_mm: std::array::from_fn(pos),
-            vel_mm_s: std::array::from_fn(|i| slack(Interval::hull(va[i], vb[i]) + de[i], de[i])),
-            acc_mm_s2: std::array::from_fn(|i| slack(acc[i], acc[i])),
+            vel_mm_s: std::array::from_fn(|i| {
+                slack(Interval::hull(va[i], vb[i]), ring.du[i]).widen(ring.du[i])
+            }),
+            acc_mm_s2: std::array::from_fn(|i| slack(acc[i], ring.acc[i])),
         }
     }
 }
@@ -356,9 +390,9 @@ pub fn peak_candidates(
     period_s: f64,
     mut out: impl FnMut(Vec3, Vec3, Vec3),
 ) {
-    let seg = &work.piece.commanded;
+    let seg = &work.commanded;
     let (t0, t1) = (seg.t0_s, seg.t1_s());
-    let lag = &work.piece.lag;
+    let lag = &work.lag;
     out(seg.p + lag.e, seg.v + lag.de, response.acceleration(lag));
     if !(period_s > 0.0 && period_s.is_finite()) {
         return;

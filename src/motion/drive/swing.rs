@@ -41,19 +41,19 @@ impl Windows {
     }
 }
 
-/// Where the actual acceleration's free part w stands at a window's end: its value
-/// and its rate.
+/// Where the actual acceleration's free part w stands at a window's end, per axis: its
+/// value and its rate.
 #[derive(Clone, Copy)]
 struct End {
-    w: f64,
-    rate: f64,
+    w: [f64; 3],
+    rate: [f64; 3],
 }
 
-/// The range of w over the windows so far.
+/// The range of w over the windows so far, per axis.
 #[derive(Clone, Copy)]
 struct Range {
-    lo: f64,
-    hi: f64,
+    lo: [f64; 3],
+    hi: [f64; 3],
 }
 
 impl Range {
@@ -66,19 +66,21 @@ impl Range {
     /// where it goes from positive to negative, a minimum the other way. The extremum is
     /// at most the envelope, and, the rate being 0 there and the second derivative at most
     /// M = `amplitude`·ω², at most M·d²/2 beyond an end d away: beyond the nearer end by at
-    /// most M·L²/8.
+    /// most M·L²/8. Without branches on the signs (they change from piece to piece, which
+    /// the branch predictor cannot guess).
     #[inline(always)]
-    fn window(&mut self, a: End, b: End, amplitude: f64, curve: f64) {
-        let beyond = amplitude * curve;
-        if a.rate > 0.0 && b.rate <= 0.0 {
-            let top = greater(a.w, b.w) + beyond;
-            self.hi = greater(self.hi, lesser(top, amplitude));
-        } else if a.rate < 0.0 && b.rate >= 0.0 {
-            let bottom = lesser(a.w, b.w) - beyond;
-            self.lo = lesser(self.lo, greater(bottom, -amplitude));
+    fn window(&mut self, a: &End, b: &End, amplitude: [f64; 3], curve: f64) {
+        for (i, &amplitude) in amplitude.iter().enumerate() {
+            let beyond = amplitude * curve;
+            let top = lesser(greater(a.w[i], b.w[i]) + beyond, amplitude);
+            let bottom = greater(lesser(a.w[i], b.w[i]) - beyond, -amplitude);
+            let up = (a.rate[i] > 0.0) & (b.rate[i] <= 0.0);
+            let down = (a.rate[i] < 0.0) & (b.rate[i] >= 0.0);
+            let hi = greater(self.hi[i], b.w[i]);
+            let lo = lesser(self.lo[i], b.w[i]);
+            self.hi[i] = greater(hi, if up { top } else { hi });
+            self.lo[i] = lesser(lo, if down { bottom } else { lo });
         }
-        self.lo = lesser(self.lo, b.w);
-        self.hi = greater(self.hi, b.w);
     }
 }
 
@@ -107,11 +109,11 @@ impl Response {
             decay,
         } = &self.windows;
         let (w2, two_sigma, to_e) = (self.omega2, 2.0 * self.sigma, -1.0 / self.omega2);
-        let at = |u: f64, du: f64| {
-            let w = w2 * u + two_sigma * du;
+        let at = |u: &[f64; 3], du: &[f64; 3]| {
+            let w: [f64; 3] = std::array::from_fn(|i| w2 * u[i] + two_sigma * du[i]);
             End {
                 w,
-                rate: w2 * du - two_sigma * w,
+                rate: std::array::from_fn(|i| w2 * du[i] - two_sigma * w[i]),
             }
         };
         // Windows [k·step, (k + 1)·step], the last one ending at the piece's end, unless the
@@ -128,35 +130,42 @@ impl Response {
         } else {
             curve(self, dt_s - (n - 1) as f64 * step_s)
         };
-        let mut out = [Interval::point(0.0); 3];
-        for (i, out) in out.iter_mut().enumerate() {
-            let e_p = a_c[i] * to_e;
-            let (mut u, mut du) = (start.e[i] - e_p, start.de[i]);
-            let mut a = at(u, du);
-            let mut w = Range { lo: a.w, hi: a.w };
-            for &decay in &decay[..n - 1] {
-                (u, du) = (m00 * u + m01 * du, m10 * u + m11 * du);
-                let b = at(u, du);
-                w.window(a, b, envelope[i] * decay, full);
-                a = b;
+        let e_p: [f64; 3] = std::array::from_fn(|i| a_c[i] * to_e);
+        let mut u: [f64; 3] = std::array::from_fn(|i| start.e[i] - e_p[i]);
+        let mut du: [f64; 3] = std::array::from_fn(|i| start.de[i]);
+        let turn = |u: &mut [f64; 3], du: &mut [f64; 3]| {
+            for i in 0..3 {
+                (u[i], du[i]) = (m00 * u[i] + m01 * du[i], m10 * u[i] + m11 * du[i]);
             }
-            let b = if tail {
-                at(m00 * u + m01 * du, m10 * u + m11 * du)
-            } else {
-                at(end.e[i] - e_p, end.de[i])
-            };
-            w.window(a, b, envelope[i] * decay[n - 1], last);
-            if tail {
-                let peak = envelope[i] * decay[WINDOWS];
-                w.lo = lesser(w.lo, -peak);
-                w.hi = greater(w.hi, peak);
-            }
-            *out = Interval {
-                lo: a_c[i] - w.hi,
-                hi: a_c[i] - w.lo,
-            };
+        };
+        let mut a = at(&u, &du);
+        let mut w = Range { lo: a.w, hi: a.w };
+        let amplitude = |decay: f64| std::array::from_fn(|i| envelope[i] * decay);
+        for &decay in &decay[..n - 1] {
+            turn(&mut u, &mut du);
+            let b = at(&u, &du);
+            w.window(&a, &b, amplitude(decay), full);
+            a = b;
         }
-        out
+        if tail {
+            turn(&mut u, &mut du);
+        } else {
+            u = std::array::from_fn(|i| end.e[i] - e_p[i]);
+            du = std::array::from_fn(|i| end.de[i]);
+        }
+        w.window(&a, &at(&u, &du), amplitude(decay[n - 1]), last);
+        if tail {
+            // Past the windows, the envelope.
+            for i in 0..3 {
+                let peak = envelope[i] * decay[WINDOWS];
+                w.hi[i] = greater(w.hi[i], peak);
+                w.lo[i] = lesser(w.lo[i], -peak);
+            }
+        }
+        std::array::from_fn(|i| Interval {
+            lo: a_c[i] - w.hi[i],
+            hi: a_c[i] - w.lo[i],
+        })
     }
 }
 

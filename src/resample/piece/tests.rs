@@ -17,15 +17,11 @@ fn seg(t0: f64, dt: f64, p: Vec3, v: Vec3, a: Vec3) -> Segment {
     }
 }
 
-fn work(s: Segment, jump: Vec3, kicks: Kicks, end_sample: bool) -> PieceWork {
+fn work(s: Segment, kicks: Kicks, end_sample: bool) -> PieceWork {
     PieceWork {
-        piece: ActualPiece {
-            commanded: s,
-            lag: Lag::default(),
-            end: Lag::default(),
-            jump,
-        },
-        kicks,
+        commanded: s,
+        lag: Lag::default(),
+        edge: Edge::Kicks(kicks),
         end_sample,
         corner_until_s: f64::NEG_INFINITY,
     }
@@ -43,12 +39,9 @@ fn the_start_every_grid_point_inside_and_the_end_when_asked() {
     let a = seg(0.0005, 0.0027, Vec3::zeros(), v, Vec3::zeros());
     let (p, _) = a.end();
     let b = seg(0.0032, 0.0028, p, v, Vec3::zeros());
-    let t: Vec<f64> = samples(&work(a, Vec3::zeros(), Kicks::default(), true), None)
+    let t: Vec<f64> = samples(&work(a, Kicks::default(), true), None)
         .iter()
-        .chain(&samples(
-            &work(b, Vec3::zeros(), Kicks::default(), false),
-            None,
-        ))
+        .chain(&samples(&work(b, Kicks::default(), false), None))
         .map(|s| s.t_s)
         .collect();
     let (end_a, start_b) = (a.t1_s(), b.t0_s);
@@ -58,7 +51,7 @@ fn the_start_every_grid_point_inside_and_the_end_when_asked() {
     );
     // A piece starting on a grid point: that point is its start, once.
     let c = seg(0.002, 0.0015, p, v, Vec3::zeros());
-    let t: Vec<f64> = samples(&work(c, Vec3::zeros(), Kicks::default(), false), None)
+    let t: Vec<f64> = samples(&work(c, Kicks::default(), false), None)
         .iter()
         .map(|s| s.t_s)
         .collect();
@@ -75,8 +68,8 @@ fn a_rigid_corner_between_long_pieces_is_dv_over_ts() {
     let jump = vy - vx;
     let ka = Kicks::around(a.t0_s, a.dt_s, Vec3::zeros(), 0.0, jump, b.dt_s, TS);
     let kb = Kicks::around(b.t0_s, b.dt_s, jump, a.dt_s, Vec3::zeros(), 0.0, TS);
-    let sa = samples(&work(a, Vec3::zeros(), ka, true), None);
-    let sb = samples(&work(b, jump, kb, false), None);
+    let sa = samples(&work(a, ka, true), None);
+    let sb = samples(&work(b, kb, false), None);
     let left = sa.last().unwrap();
     let right = &sb[0];
     for s in [left, right] {
@@ -117,7 +110,7 @@ fn a_circle_of_short_rigid_chords_shows_v2_over_r_at_every_sample() {
         let jin = (dir(k) - dir(k - 1)) * v;
         let jout = (dir(k + 1) - dir(k)) * v;
         let kicks = Kicks::around(s.t0_s, tau, jin, tau, jout, tau, TS);
-        for x in samples(&work(s, jin, kicks, true), None) {
+        for x in samples(&work(s, kicks, true), None) {
             acc.push(x.acc_mm_s2.norm());
         }
     }
@@ -143,12 +136,7 @@ fn with_a_drive_a_sample_is_the_command_plus_the_lag() {
         Vec3::zeros(),
     );
     let piece = drive.push(&a);
-    let w = PieceWork {
-        piece,
-        kicks: Kicks::default(),
-        end_sample: false,
-        corner_until_s: 0.5 / 45.0,
-    };
+    let w = PieceWork::new(&piece, None, false, 0.5 / 45.0);
     for s in samples(&w, Some(&r)) {
         let lag = r.lag_at(&piece.lag, a.a, s.t_s);
         let (p, v, _) = a.at(s.t_s);
@@ -178,16 +166,12 @@ fn ringing_piece() -> (PieceWork, Response) {
         Vec3::new(-600.0, 200.0, 0.0),
     );
     let w = PieceWork {
-        piece: ActualPiece {
-            commanded: s,
-            lag: Lag {
-                e: Vec3::new(0.02, -0.01, 0.0),
-                de: Vec3::new(-4.0, 2.5, 0.3),
-            },
-            end: Lag::default(),
-            jump: Vec3::zeros(),
+        commanded: s,
+        lag: Lag {
+            e: Vec3::new(0.02, -0.01, 0.0),
+            de: Vec3::new(-4.0, 2.5, 0.3),
         },
-        kicks: Kicks::default(),
+        edge: Edge::End(Lag::default()),
         end_sample: false,
         corner_until_s: 12.35,
     };
@@ -196,8 +180,7 @@ fn ringing_piece() -> (PieceWork, Response) {
 
 /// `w` with the lag at its end that the drive stage gives it.
 fn with_end(mut w: PieceWork, r: &Response) -> PieceWork {
-    let p = &mut w.piece;
-    p.end = r.lag_at(&p.lag, p.commanded.a, p.commanded.dt_s);
+    w.edge = Edge::End(r.lag_at(&w.lag, w.commanded.a, w.commanded.dt_s));
     w
 }
 
@@ -260,7 +243,7 @@ fn every_sample_of_a_run_lies_in_its_box_and_skipped_runs_leave_the_rest_bit_for
         response: &r,
         period_s: TS,
     };
-    let k0 = first_grid_index(w.piece.commanded.t0_s, TS);
+    let k0 = first_grid_index(w.commanded.t0_s, TS);
     let contains = |i: Interval, x: f64| i.lo <= x && x <= i.hi;
     for from in (1..dense.len()).step_by(7) {
         for len in [1, 2, 5, 17, 64, 200] {
@@ -288,14 +271,14 @@ fn a_whole_piece_box_holds_every_sample_and_counts_them() {
     };
     let cut = |t0_s: f64, dt_s: f64, end_sample: bool| {
         let mut c = w;
-        c.piece.commanded.t0_s = t0_s;
-        c.piece.commanded.dt_s = dt_s;
+        c.commanded.t0_s = t0_s;
+        c.commanded.dt_s = dt_s;
         c.end_sample = end_sample;
         with_end(c, &r)
     };
     let short = cut(12.3452, 0.0003, false);
     let mut at_grid = w;
-    at_grid.piece.commanded.t0_s = 12.345;
+    at_grid.commanded.t0_s = 12.345;
     let swings = [cut(12.3452, 0.0074, false), cut(12.3452, 0.0091, true)];
     let contains = |i: Interval, x: f64| i.lo <= x && x <= i.hi;
     for w in &swings {
@@ -307,7 +290,7 @@ fn a_whole_piece_box_holds_every_sample_and_counts_them() {
                 response: &r,
                 period_s: TS,
             }
-            .span(0.0, w.piece.commanded.dt_s, Fit::Envelope),
+            .span(0.0, w.commanded.dt_s, Fit::Envelope),
         );
         for k in 0..2 {
             let width = |i: Interval| i.hi - i.lo;
