@@ -235,7 +235,7 @@ pub enum Fit {
     /// The lag's ringing envelope over the piece ([`Response::ringing`]): cheap.
     Envelope,
     /// The actual acceleration's swing over the piece ([`Response::acceleration_range`]):
-    /// about 280 instructions more a piece, and let go more often (docs/performance.md).
+    /// a few hundred instructions more a piece, and let go more often (docs/performance.md).
     Swing,
 }
 
