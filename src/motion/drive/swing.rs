@@ -198,8 +198,8 @@ mod tests {
 
     proptest! {
         /// Every instant of the piece, densely (1/50 of a window), lies in the range; a
-        /// swing that forgot an extremum inside a window, took a window of a whole half
-        /// period, or mixed up a rate's sign, fails.
+        /// range that forgot an extremum inside a window or its bound beyond the nearer end
+        /// (M·L²/8), or took windows longer than half a damped period, fails (each tried).
         #[test]
         fn the_range_holds_the_acceleration_at_every_instant(
             f in 20.0..120.0f64, zeta in 0.0..0.5f64,
