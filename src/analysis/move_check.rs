@@ -10,13 +10,16 @@ use crate::motion::drive::{Drive, Response};
 use crate::path::Path;
 use crate::report::{MoveStats, NEAR_SINGULAR_RATIO, PathChecks, Problem, share};
 use crate::resample::{
-    Fit, Phase, PieceWork, SPARSE_MIN_SAMPLES, Sample, SampleSink, StateBox, peak_candidates,
-    piece_samples, piece_states, sample_piece,
+    Phase, PieceWork, Sample, SampleSink, StateBox, peak_candidates, sample_piece,
 };
 
 use super::MoveResult;
 use super::observe::{Evaluated, Observer, Verdict, unreachable};
 use super::sequence::MoveWork;
+
+mod whole;
+
+use whole::WholeMove;
 
 /// Tolerance on the print radius and the bed, mm: rounding in slicer output.
 const GEOMETRY_TOLERANCE_MM: f64 = 1e-3;
@@ -33,10 +36,6 @@ pub const DENSE_ENV: &str = "DELTA_GCODE_DENSE";
 /// A move is seeded for a sparse evaluation (its peak candidates computed first) when one
 /// of its pieces lasts this many sampling periods: shorter pieces are sampled whole.
 const SEED_MIN_PERIODS: f64 = 64.0;
-
-/// A move of at most this many pieces is offered in the box of [`Fit::Swing`] at once; one
-/// of more, first in that of [`Fit::Envelope`] (docs/performance.md).
-const SWING_FIRST_PIECES: usize = 4;
 
 /// Checks moves against one machine, for the verdict and for `observer`. Shared between
 /// threads; each thread brings its own [`Scratch`].
@@ -117,6 +116,9 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
         let base = out.len();
         let run = self.run_floor.as_ref().map(RunFloor::get);
         let mut revisit = std::mem::take(&mut scratch.revisit);
+        if let Some(run) = &run {
+            self.let_go_whole(scratch, pieces, moves, run);
+        }
         for (idx, m) in moves.iter().enumerate() {
             out.push(MoveResult {
                 group: m.group,
@@ -128,9 +130,18 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
             let skipped = match &run {
                 // A line split between batches is joined after the checks: its parts
                 // could not be sampled again.
-                Some(run) if !m.split => {
-                    self.sample_move(scratch, works, base + idx, out, Some(Reference::Run(run)))
-                }
+                Some(run) if !m.split => match scratch.whole.get(idx) {
+                    Some(Some(w)) if w.let_go => {
+                        if let Some(r) = out.last_mut() {
+                            r.stats.samples += w.count;
+                        }
+                        self.skipped.fetch_add(w.count, Ordering::Relaxed);
+                        true
+                    }
+                    _ => {
+                        self.sample_move(scratch, works, base + idx, out, Some(Reference::Run(run)))
+                    }
+                },
                 _ => {
                     let floor = self.floor(works);
                     let reference = floor.as_ref().map(Reference::Move);
@@ -182,9 +193,6 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
             reference,
             skipped: false,
         };
-        if sink.whole_pieces() && self.skip_whole(works, &mut sink) {
-            return true;
-        }
         for work in works {
             let seg = &work.commanded;
             if seg.dt_s > MAX_SAMPLES_PER_PIECE * period_s {
@@ -196,42 +204,6 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
             sample_piece(work, self.response.as_ref(), period_s, &mut sink);
         }
         sink.skipped
-    }
-
-    /// Offers `sink` all the samples of a move's pieces at once, in one box: one bound for
-    /// the move instead of one per piece.
-    fn skip_whole(&self, works: &[PieceWork], sink: &mut MoveSink<O>) -> bool {
-        let (Some(r), Some((first, rest))) = (&self.response, works.split_first()) else {
-            return false;
-        };
-        let period_s = self.machine.sampling.period_s;
-        // In one pass: whether every piece is sampled, and how many samples.
-        let mut count = 0;
-        for w in works {
-            if w.commanded.dt_s > MAX_SAMPLES_PER_PIECE * period_s {
-                return false;
-            }
-            count += piece_samples(w, period_s);
-        }
-        if count < SPARSE_MIN_SAMPLES {
-            return false;
-        }
-        let states = |fit: Fit| {
-            let mut states = piece_states(first, r, period_s, fit);
-            for w in rest {
-                states = states.join(&piece_states(w, r, period_s, fit));
-            }
-            states
-        };
-        // A move of few pieces gets the swing's box at once; one of many (an input
-        // shaper's), which the envelope's box lets go most of the time, only after that.
-        if works.len() <= SWING_FIRST_PIECES {
-            return sink.skip(&states(Fit::Swing), count);
-        }
-        if sink.skip(&states(Fit::Envelope), count) {
-            return true;
-        }
-        sink.skip(&states(Fit::Swing), count)
     }
 
     /// Whether the report lists a move with these statistics: a problem, a motor asked
@@ -473,9 +445,7 @@ impl<O: Observer> SampleSink for MoveSink<'_, '_, O> {
         ) else {
             return false;
         };
-        let motors = &self.checker.machine.motors;
-        // The available force falls with the carriage speed: least at the bound.
-        let most_share = |i: usize| share(b.force_n[i], motors.available_force_n(b.speed_mm_s[i]));
+        let checker = self.checker;
         let below = match reference {
             Reference::Move(floor) => {
                 if self.scratch.len > 0 {
@@ -486,16 +456,12 @@ impl<O: Observer> SampleSink for MoveSink<'_, '_, O> {
                 };
                 (0..3).all(|i| {
                     b.force_n[i] < stats.peak_force_n[i].max(floor.force_n[i])
-                        && most_share(i) < stats.worst[i].ratio.max(floor.share[i])
+                        && checker.most_share(&b, i) < stats.worst[i].ratio.max(floor.share[i])
                         && b.tension_n[i] < stats.peak_tension_n[i].max(floor.tension_n[i])
                         && b.speed_mm_s[i] < stats.peak_speed_mm_s.max(floor.speed_mm_s)
                 })
             }
-            Reference::Run(run) => (0..3).all(|i| {
-                b.force_n[i] < run.force_n[i]
-                    && most_share(i) < run.share[i].min(1.0)
-                    && b.tension_n[i] < run.tension_n[i].min(self.checker.hold_n)
-            }),
+            Reference::Run(run) => checker.bounds_below_run(&b, run),
         };
         let Some(stats) = self.out.get_mut(self.slot).map(|r| &mut r.stats) else {
             return false;
@@ -522,6 +488,10 @@ pub struct Scratch {
     available_n: [[f64; BLOCK]; 3],
     /// The moves of a call some of whose samples went uncomputed (indices in its moves).
     revisit: Vec<usize>,
+    /// The moves of a call offered whole to the run's peaks, and which went
+    /// ([`MoveChecker::let_go_whole`]); the indices of the offered ones.
+    whole: Vec<Option<WholeMove>>,
+    offered: Vec<usize>,
 }
 
 impl Default for Scratch {
@@ -536,6 +506,8 @@ impl Default for Scratch {
             forces: ForceBlock::default(),
             available_n: [[0.0; BLOCK]; 3],
             revisit: Vec::new(),
+            whole: Vec::new(),
+            offered: Vec::new(),
         }
     }
 }

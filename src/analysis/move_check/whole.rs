@@ -1,0 +1,257 @@
+//! Whole moves offered to the run's peaks before any of their samples: a box of all a
+//! move's samples, the boxes of a few consecutive moves joined and offered to one bound
+//! (docs/performance.md, "Sixth session").
+
+use super::{Floor, MoveChecker, Scratch};
+use crate::analysis::observe::Observer;
+use crate::analysis::sequence::MoveWork;
+use crate::delta::ForceBounds;
+use crate::motion::drive::Response;
+use crate::report::share;
+use crate::resample::{Fit, PieceWork, SPARSE_MIN_SAMPLES, StateBox, piece_samples, piece_states};
+
+use super::MAX_SAMPLES_PER_PIECE;
+
+/// A move of at most this many pieces is offered in the box of [`Fit::Swing`] at once; one
+/// of more, first in that of [`Fit::Envelope`] (docs/performance.md).
+const SWING_FIRST_PIECES: usize = 4;
+
+/// Moves whose boxes are joined and offered to one bound first
+/// ([`MoveChecker::let_go_whole`]): on the first 5 MB of the corpus's bunny, groups of 2, 4
+/// and 8 moves take 2.111, 2.093 and 2.108 G instructions (docs/performance.md).
+const WHOLE_GROUP: usize = 4;
+
+/// A move offered whole to the run's peaks: the box of all its samples, how many, the fit
+/// of its accelerations, and whether a bound let it go.
+#[derive(Clone, Copy)]
+pub(super) struct WholeMove {
+    states: StateBox,
+    pub(super) count: u64,
+    fit: Fit,
+    pub(super) let_go: bool,
+}
+
+impl<O: Observer> MoveChecker<'_, O> {
+    /// Decides, before any sample, which moves of a call the run's peaks let go whole
+    /// (`scratch.whole`, one entry per move): each move's box of all its samples, the
+    /// boxes of [`WHOLE_GROUP`] consecutive offered moves joined and offered to one bound,
+    /// a group the bound keeps halved and each half offered again, down to single moves.
+    /// Most groups go on one bound, so most moves cost a box and a fraction of a bound.
+    pub(super) fn let_go_whole(
+        &self,
+        scratch: &mut Scratch,
+        pieces: &[PieceWork],
+        moves: &[MoveWork],
+        run: &Floor,
+    ) {
+        let mut whole = std::mem::take(&mut scratch.whole);
+        let mut offered = std::mem::take(&mut scratch.offered);
+        whole.clear();
+        offered.clear();
+        for (idx, m) in moves.iter().enumerate() {
+            let works = pieces.get(m.first..m.first + m.count).unwrap_or_default();
+            let w = (!m.split).then(|| self.whole_box(works)).flatten();
+            if w.is_some() {
+                offered.push(idx);
+            }
+            whole.push(w);
+        }
+        for group in offered.chunks(WHOLE_GROUP) {
+            self.let_go_group(&mut whole, group, pieces, moves, run);
+        }
+        scratch.whole = whole;
+        scratch.offered = offered;
+    }
+
+    /// Offers the joined boxes of the moves `group` (indices in `whole`) to one bound; if
+    /// it keeps them, each half of the group, down to single moves, which get the swing's
+    /// box as a second chance when theirs was the envelope's.
+    fn let_go_group(
+        &self,
+        whole: &mut [Option<WholeMove>],
+        group: &[usize],
+        pieces: &[PieceWork],
+        moves: &[MoveWork],
+        run: &Floor,
+    ) {
+        let boxes = group.iter().filter_map(|&i| whole[i].as_ref());
+        let Some(joined) = boxes.map(|w| w.states).reduce(|a, b| a.join(&b)) else {
+            return;
+        };
+        if self.below_run(&joined, run) {
+            for &i in group {
+                if let Some(w) = &mut whole[i] {
+                    w.let_go = true;
+                }
+            }
+            return;
+        }
+        if let [i] = *group {
+            let (Some(w), Some(r)) = (&mut whole[i], &self.response) else {
+                return;
+            };
+            if w.fit == Fit::Envelope {
+                let m = &moves[i];
+                let works = pieces.get(m.first..m.first + m.count).unwrap_or_default();
+                w.let_go = self.below_run(&self.move_states(works, r, Fit::Swing), run);
+            }
+            return;
+        }
+        let (a, b) = group.split_at(group.len() / 2);
+        self.let_go_group(whole, a, pieces, moves, run);
+        self.let_go_group(whole, b, pieces, moves, run);
+    }
+
+    /// A box of all the samples of a move's pieces, to be offered whole: None when some
+    /// piece is too long to sample or the move has too few samples to pay for a bound.
+    /// A move of few pieces gets the swing's box at once; one of many (an input shaper's),
+    /// the envelope's, which lets it go most of the time.
+    fn whole_box(&self, works: &[PieceWork]) -> Option<WholeMove> {
+        let r = self.response.as_ref()?;
+        let period_s = self.machine.sampling.period_s;
+        // In one pass: whether every piece is sampled, and how many samples.
+        let mut count = 0;
+        for w in works {
+            if w.commanded.dt_s > MAX_SAMPLES_PER_PIECE * period_s {
+                return None;
+            }
+            count += piece_samples(w, period_s);
+        }
+        if count < SPARSE_MIN_SAMPLES || works.is_empty() {
+            return None;
+        }
+        let fit = if works.len() <= SWING_FIRST_PIECES {
+            Fit::Swing
+        } else {
+            Fit::Envelope
+        };
+        Some(WholeMove {
+            states: self.move_states(works, r, fit),
+            count,
+            fit,
+            let_go: false,
+        })
+    }
+
+    /// The join of the boxes of a move's pieces (not empty).
+    fn move_states(&self, works: &[PieceWork], r: &Response, fit: Fit) -> StateBox {
+        let period_s = self.machine.sampling.period_s;
+        let mut states = piece_states(&works[0], r, period_s, fit);
+        for w in &works[1..] {
+            states = states.join(&piece_states(w, r, period_s, fit));
+        }
+        states
+    }
+
+    /// Whether the bounds over `states` (`DeltaModel::bound`: every state of the box a
+    /// valid pose, |Q_i|, the share of the available force and the tension, each with its
+    /// margin) are below the run's peaks and below a violation (a share of 1, the magnets'
+    /// hold), strictly, on every tower: then none of its samples could change the run's
+    /// peaks or make a violation.
+    fn below_run(&self, states: &StateBox, run: &Floor) -> bool {
+        self.model
+            .bound(&states.pos_mm, &states.vel_mm_s, &states.acc_mm_s2)
+            .is_some_and(|b| self.bounds_below_run(&b, run))
+    }
+
+    /// [`Self::below_run`] of the bounds over a box.
+    pub(super) fn bounds_below_run(&self, b: &ForceBounds, run: &Floor) -> bool {
+        (0..3).all(|i| {
+            b.force_n[i] < run.force_n[i]
+                && self.most_share(b, i) < run.share[i].min(1.0)
+                && b.tension_n[i] < run.tension_n[i].min(self.hold_n)
+        })
+    }
+
+    /// The largest share of the available force tower `i` may be asked within bounds `b`:
+    /// the available force falls with the carriage speed, so it is least at the bound.
+    pub(super) fn most_share(&self, b: &ForceBounds, i: usize) -> f64 {
+        let available = self.machine.motors.available_force_n(b.speed_mm_s[i]);
+        share(b.force_n[i], available)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::analysis::{Batch, MoveResult, sequence};
+    use crate::machine::Machine;
+    use crate::machine::test_support::kossel_machine;
+    use crate::motion::drive::{Drive, Spring};
+    use crate::motion::shaper::{AxisShaper, ShaperType};
+
+    /// The fixture's moves in one batch (no line split).
+    fn batch(machine: &Machine) -> Batch {
+        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/ps25_bunny_head.gcode");
+        let gcode = std::fs::read(path).expect("fixture");
+        let mut batches = Vec::new();
+        sequence(&gcode[..], machine, usize::MAX, |_| {}, |b| batches.push(b)).expect("reads");
+        batches.remove(0)
+    }
+
+    /// Every move a bound lets go in its own box goes with the groups too (halving a group
+    /// loses none), and every move the groups let go is below the run's peaks in its dense
+    /// samples (a group's bound holds each of its moves). The run's peaks are 0.9 of the
+    /// dense ones, so that some moves go and some do not; with and without a shaper (whose
+    /// moves of many pieces get the swing's box as a second chance).
+    #[test]
+    fn groups_let_go_what_single_moves_do_and_only_what_is_below() {
+        for shaped in [false, true] {
+            let mut machine = kossel_machine();
+            machine.drive = Drive::Spring(Spring {
+                frequency_hz: 55.0,
+                damping_ratio: 0.08,
+            });
+            if shaped {
+                machine.input_shaper.x = Some(AxisShaper {
+                    kind: ShaperType::Mzv,
+                    freq_hz: 40.0,
+                    damping_ratio: 0.1,
+                });
+                machine.input_shaper.y = machine.input_shaper.x;
+            }
+            let b = batch(&machine);
+            let checker = MoveChecker::new(&machine, ());
+            let mut scratch = Box::<Scratch>::default();
+            let mut dense: Vec<MoveResult<()>> = Vec::new();
+            let dense_checker = MoveChecker::new(&machine, ()).dense();
+            dense_checker.check_moves(&mut scratch, &b.pieces, &b.moves, &mut dense);
+            let mut run = Floor::default();
+            for r in &dense {
+                for i in 0..3 {
+                    run.force_n[i] = run.force_n[i].max(0.9 * r.stats.peak_force_n[i]);
+                    run.share[i] = run.share[i].max(0.9 * r.stats.worst[i].ratio);
+                    run.tension_n[i] = run.tension_n[i].max(0.9 * r.stats.peak_tension_n[i]);
+                }
+            }
+            checker.let_go_whole(&mut scratch, &b.pieces, &b.moves, &run);
+            let r = checker.response.as_ref().expect("a drive");
+            let (mut went, mut kept, mut second) = (0, 0, 0);
+            for (i, w) in scratch.whole.iter().enumerate() {
+                let Some(w) = w else { continue };
+                let m = &b.moves[i];
+                let works = &b.pieces[m.first..m.first + m.count];
+                let alone = checker.below_run(&w.states, &run)
+                    || (w.fit == Fit::Envelope
+                        && checker.below_run(&checker.move_states(works, r, Fit::Swing), &run));
+                second += usize::from(w.fit == Fit::Envelope);
+                assert!(!alone || w.let_go, "line {}: lost by the groups", m.line);
+                if w.let_go {
+                    went += 1;
+                    let s = &dense[i].stats;
+                    assert_eq!(s.samples, w.count, "line {}", m.line);
+                    for t in 0..3 {
+                        assert!(s.peak_force_n[t] < run.force_n[t], "line {}", m.line);
+                        assert!(s.worst[t].ratio < run.share[t], "line {}", m.line);
+                        assert!(s.peak_tension_n[t] < run.tension_n[t], "line {}", m.line);
+                    }
+                } else {
+                    kept += 1;
+                }
+            }
+            eprintln!("shaped {shaped}: {went} went, {kept} kept, {second} of many pieces");
+            assert!(went > 50 && kept > 10, "shaped {shaped}: {went} went, {kept} kept");
+            assert!(!shaped || second > 100, "{second} moves of many pieces");
+        }
+    }
+}
