@@ -182,7 +182,10 @@ mod tests {
 
     /// The fixture's moves in one batch (no line split).
     fn batch(machine: &Machine) -> Batch {
-        let path = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/ps25_bunny_head.gcode");
+        let path = concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/tests/fixtures/ps25_bunny_head.gcode"
+        );
         let gcode = std::fs::read(path).expect("fixture");
         let mut batches = Vec::new();
         sequence(&gcode[..], machine, usize::MAX, |_| {}, |b| batches.push(b)).expect("reads");
@@ -250,7 +253,10 @@ mod tests {
                 }
             }
             eprintln!("shaped {shaped}: {went} went, {kept} kept, {second} of many pieces");
-            assert!(went > 50 && kept > 10, "shaped {shaped}: {went} went, {kept} kept");
+            assert!(
+                went > 50 && kept > 10,
+                "shaped {shaped}: {went} went, {kept} kept"
+            );
             assert!(!shaped || second > 100, "{second} moves of many pieces");
         }
     }
