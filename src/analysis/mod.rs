@@ -298,16 +298,30 @@ impl<O: Observer> ModelStage<'_, O> {
                 out
             })
             .collect();
-        for r in results.into_iter().flatten() {
-            match &mut self.pending {
-                Some(p) if p.group == r.group => {
-                    p.stats.merge(&r.stats);
-                    checker.observer().merge(&mut p.observed, r.observed);
-                }
-                _ => {
-                    if let Some(done) = self.pending.replace(r) {
-                        on_move(done);
+        // A line is split between batches only at their boundary: the batch's first
+        // result may continue the pending one, and its last may go on in the next batch.
+        // Each result is moved once, into `on_move` (a result is 400 bytes).
+        let last = results.iter().rposition(|v| !v.is_empty());
+        for (c, v) in results.into_iter().enumerate() {
+            let n = v.len();
+            for (k, r) in v.into_iter().enumerate() {
+                match &mut self.pending {
+                    Some(p) if p.group == r.group => {
+                        p.stats.merge(&r.stats);
+                        checker.observer().merge(&mut p.observed, r.observed);
+                        continue;
                     }
+                    Some(_) => {
+                        if let Some(done) = self.pending.take() {
+                            on_move(done);
+                        }
+                    }
+                    None => {}
+                }
+                if Some(c) == last && k + 1 == n {
+                    self.pending = Some(r);
+                } else {
+                    on_move(r);
                 }
             }
         }
