@@ -127,7 +127,7 @@ fn check_stats(s: &MoveStats) {
             .all(|w| w.force_n.is_finite() && w.available_n.is_finite()),
         "{s:?}"
     );
-    match &s.checks.problem {
+    match s.checks.problem.as_deref() {
         None => {}
         Some(Problem::Unreachable { t_s, pos_mm, .. }) => {
             assert!(t_s.is_finite() && finite(pos_mm), "{s:?}")

@@ -369,7 +369,7 @@ impl RunFloor {
         if stats
             .checks
             .problem
-            .as_ref()
+            .as_deref()
             .is_some_and(Problem::unreachable)
         {
             return;

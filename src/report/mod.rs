@@ -222,7 +222,11 @@ impl Report {
     /// Takes one move's statistics, in file order. A move out of reach adds no force: its
     /// samples near the edge of the reach ask for forces that mean nothing.
     pub fn add_move(&mut self, m: &MoveStats) {
-        let reachable = !m.checks.problem.as_ref().is_some_and(Problem::unreachable);
+        let reachable = !m
+            .checks
+            .problem
+            .as_deref()
+            .is_some_and(Problem::unreachable);
         let s = &mut self.summary;
         s.moves += 1;
         s.samples += m.samples;
@@ -269,7 +273,7 @@ impl Report {
 
     fn violation_of(&self, m: &MoveStats) -> Option<Violation> {
         let worst = m.worst_tower();
-        let (kind, tower, t_s, message) = match &m.checks.problem {
+        let (kind, tower, t_s, message) = match m.checks.problem.as_deref() {
             Some(
                 p @ Problem::Unreachable {
                     t_s,
@@ -365,7 +369,11 @@ impl Report {
             }
         };
         let phase = m.peak_phase[worst];
-        let reachable = !m.checks.problem.as_ref().is_some_and(Problem::unreachable);
+        let reachable = !m
+            .checks
+            .problem
+            .as_deref()
+            .is_some_and(Problem::unreachable);
         Some(Violation {
             line: m.line,
             kind,

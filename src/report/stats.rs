@@ -94,8 +94,9 @@ pub struct MoveStats {
 /// these from the checks of a line's planned moves to the sampling of its pieces.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct PathChecks {
-    /// The most severe geometric problem found, if any.
-    pub problem: Option<Problem>,
+    /// The most severe geometric problem found, if any (boxed: rare, and the checks of
+    /// every move are carried through the sequential stages).
+    pub problem: Option<Box<Problem>>,
     /// Near a singular pose: the tower (0 = A) whose carriage moves fastest relative to the
     /// nozzle, and that speed ratio, when it exceeds [`NEAR_SINGULAR_RATIO`].
     pub near_singular: Option<(usize, f64)>,
@@ -114,7 +115,7 @@ impl PathChecks {
             .as_ref()
             .is_none_or(|p| problem.severity() > p.severity())
         {
-            self.problem = Some(problem);
+            self.problem = Some(Box::new(problem));
         }
     }
 
@@ -130,7 +131,7 @@ impl PathChecks {
     pub fn merge(&mut self, later: &PathChecks) {
         self.offset_mm = later.offset_mm;
         if let Some(p) = &later.problem {
-            self.flag(p.clone());
+            self.flag(Problem::clone(p));
         }
         if let Some((tower, ratio)) = later.near_singular {
             self.near(tower, ratio);
@@ -444,7 +445,7 @@ mod tests {
             limit_mm: 85.0,
         };
         s.flag(outside.clone());
-        assert_eq!(s.problem, Some(outside));
+        assert_eq!(s.problem.as_deref(), Some(&outside));
         let above = |t_s| Problem::AboveHome {
             t_s,
             tower: 0,
@@ -452,7 +453,7 @@ mod tests {
         };
         s.flag(above(0.5));
         s.flag(above(0.7));
-        assert_eq!(s.problem, Some(above(0.5)));
+        assert_eq!(s.problem.as_deref(), Some(&above(0.5)));
         let unreachable = Problem::Unreachable {
             t_s: 0.9,
             tower: Some(1),
@@ -465,6 +466,6 @@ mod tests {
             radius_mm: 300.0,
             limit_mm: 85.0,
         });
-        assert_eq!(s.problem, Some(unreachable));
+        assert_eq!(s.problem.as_deref(), Some(&unreachable));
     }
 }
