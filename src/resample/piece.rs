@@ -242,12 +242,53 @@ pub enum Fit {
 /// A box holding the states of every sample [`sample_piece`] takes of `work` with the drive
 /// `response` (see [`piece_samples`]).
 pub fn piece_states(work: &PieceWork, response: &Response, period_s: f64, fit: Fit) -> StateBox {
+    piece_raw(work, response, period_s, fit).slacked()
+}
+
+/// [`piece_states`] before its rounding slack: the boxes of a move's pieces are joined so,
+/// and the join slacked once ([`RawBox::slacked`]).
+#[inline(always)]
+pub fn piece_raw(work: &PieceWork, response: &Response, period_s: f64, fit: Fit) -> RawBox {
     let grid = Grid {
         work,
         response,
         period_s,
     };
-    grid.span(0.0, work.commanded.dt_s, fit)
+    grid.raw(0.0, work.commanded.dt_s, fit)
+}
+
+/// A box of states before the slack for rounding, with the ringing amplitudes the slack
+/// grows with (position, velocity, acceleration, per axis).
+#[derive(Clone, Copy, Debug)]
+pub struct RawBox {
+    states: StateBox,
+    ring: [Vec3; 3],
+}
+
+impl RawBox {
+    /// The smallest raw box holding both: each slacked box lies in the join's, slacked.
+    #[inline(always)]
+    pub fn join(&self, o: &RawBox) -> RawBox {
+        RawBox {
+            states: self.states.join(&o.states),
+            ring: std::array::from_fn(|q| self.ring[q].sup(&o.ring[q])),
+        }
+    }
+
+    /// Widened by the rounding of the sampled states (the commanded polynomial, the lag's
+    /// walk, τ = k·Ts − t0 at large t): [`STATE_SLACK`] and [`STATE_SLACK_REL`] of the
+    /// range's magnitude and the ringing, far below anything physical.
+    #[inline(always)]
+    pub fn slacked(&self) -> StateBox {
+        let slack =
+            |x: Interval, ring: f64| x.widen(STATE_SLACK + STATE_SLACK_REL * (x.mag() + ring));
+        let s = &self.states;
+        StateBox {
+            pos_mm: std::array::from_fn(|i| slack(s.pos_mm[i], self.ring[0][i])),
+            vel_mm_s: std::array::from_fn(|i| slack(s.vel_mm_s[i], self.ring[1][i])),
+            acc_mm_s2: std::array::from_fn(|i| slack(s.acc_mm_s2[i], self.ring[2][i])),
+        }
+    }
 }
 
 /// The first grid index strictly after `t0`: the piece's first grid point inside.
@@ -342,14 +383,14 @@ impl Grid<'_> {
     /// start): the commanded polynomial's range (its ends and, for the position, its
     /// vertex) plus the lag's ringing from `ta` on ([`Response::ringing`]); with
     /// [`Fit::Swing`], for the whole piece only (ta = 0, tb its duration), the
-    /// acceleration's swing over it instead ([`Response::acceleration_range`]).
-    fn span(&self, ta: f64, tb: f64, fit: Fit) -> StateBox {
+    /// acceleration's swing over it instead ([`Response::acceleration_range`]). Before the
+    /// slack for rounding ([`RawBox::slacked`]).
+    #[inline(always)]
+    fn raw(&self, ta: f64, tb: f64, fit: Fit) -> RawBox {
         let work = self.work;
         let seg = &work.commanded;
         let ((pa, va, _), (pb, vb, _)) = (seg.at(ta), seg.at(tb));
         let ring = self.response.ringing(&work.lag, seg.a, ta);
-        let slack =
-            |x: Interval, ring: f64| x.widen(STATE_SLACK + STATE_SLACK_REL * (x.mag() + ring));
         let pos = |i: usize| {
             let mut pos = Interval::hull(pa[i], pb[i]);
             // The parabola's vertex, where the velocity changes sign inside the run.
@@ -360,7 +401,7 @@ impl Grid<'_> {
                     pos = pos.join(Interval::point(pv));
                 }
             }
-            slack(pos + ring.e_p[i], ring.u[i]).widen(ring.u[i])
+            (pos + ring.e_p[i]).widen(ring.u[i])
         };
         let acc = match (fit, &work.edge) {
             (Fit::Swing, Edge::End(end)) => self
@@ -368,13 +409,19 @@ impl Grid<'_> {
                 .acceleration_range(&work.lag, end, seg.a, seg.dt_s, ring.acc),
             _ => std::array::from_fn(|i| Interval::around(ring.acc_p[i], ring.acc[i])),
         };
-        StateBox {
-            pos_mm: std::array::from_fn(pos),
-            vel_mm_s: std::array::from_fn(|i| {
-                slack(Interval::hull(va[i], vb[i]), ring.du[i]).widen(ring.du[i])
-            }),
-            acc_mm_s2: std::array::from_fn(|i| slack(acc[i], ring.acc[i])),
+        RawBox {
+            states: StateBox {
+                pos_mm: std::array::from_fn(pos),
+                vel_mm_s: std::array::from_fn(|i| Interval::hull(va[i], vb[i]).widen(ring.du[i])),
+                acc_mm_s2: acc,
+            },
+            ring: [ring.u, ring.du, ring.acc],
         }
+    }
+
+    /// [`Self::raw`], slacked.
+    fn span(&self, ta: f64, tb: f64, fit: Fit) -> StateBox {
+        self.raw(ta, tb, fit).slacked()
     }
 }
 

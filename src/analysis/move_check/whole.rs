@@ -8,7 +8,7 @@ use crate::analysis::sequence::MoveWork;
 use crate::delta::ForceBounds;
 use crate::motion::drive::Response;
 use crate::report::share;
-use crate::resample::{Fit, PieceWork, SPARSE_MIN_SAMPLES, StateBox, piece_samples, piece_states};
+use crate::resample::{Fit, PieceWork, SPARSE_MIN_SAMPLES, StateBox, piece_raw, piece_samples};
 
 use super::MAX_SAMPLES_PER_PIECE;
 
@@ -133,14 +133,14 @@ impl<O: Observer> MoveChecker<'_, O> {
         })
     }
 
-    /// The join of the boxes of a move's pieces (not empty).
+    /// The join of the boxes of a move's pieces (not empty), slacked once.
     fn move_states(&self, works: &[PieceWork], r: &Response, fit: Fit) -> StateBox {
         let period_s = self.machine.sampling.period_s;
-        let mut states = piece_states(&works[0], r, period_s, fit);
+        let mut raw = piece_raw(&works[0], r, period_s, fit);
         for w in &works[1..] {
-            states = states.join(&piece_states(w, r, period_s, fit));
+            raw = raw.join(&piece_raw(w, r, period_s, fit));
         }
-        states
+        raw.slacked()
     }
 
     /// Whether the bounds over `states` (`DeltaModel::bound`: every state of the box a
@@ -175,10 +175,12 @@ impl<O: Observer> MoveChecker<'_, O> {
 mod tests {
     use super::*;
     use crate::analysis::{Batch, MoveResult, sequence};
+    use crate::interval::Interval;
     use crate::machine::Machine;
     use crate::machine::test_support::kossel_machine;
     use crate::motion::drive::{Drive, Spring};
     use crate::motion::shaper::{AxisShaper, ShaperType};
+    use crate::resample::sample_piece;
 
     /// The fixture's moves in one batch (no line split).
     fn batch(machine: &Machine) -> Batch {
@@ -192,6 +194,61 @@ mod tests {
         batches.remove(0)
     }
 
+    /// A sprung machine, shaped or not.
+    fn machine(shaped: bool) -> Machine {
+        let mut machine = kossel_machine();
+        machine.drive = Drive::Spring(Spring {
+            frequency_hz: 55.0,
+            damping_ratio: 0.08,
+        });
+        if shaped {
+            machine.input_shaper.x = Some(AxisShaper {
+                kind: ShaperType::Mzv,
+                freq_hz: 40.0,
+                damping_ratio: 0.1,
+            });
+            machine.input_shaper.y = machine.input_shaper.x;
+        }
+        machine
+    }
+
+    /// A move's box (its pieces' boxes joined, slacked once) holds every sample of the move,
+    /// in both fits, on every move of the fixture with and without a shaper.
+    #[test]
+    fn a_moves_box_holds_its_samples() {
+        for shaped in [false, true] {
+            let machine = machine(shaped);
+            let b = batch(&machine);
+            let checker = MoveChecker::new(&machine, ());
+            let r = checker.response.as_ref().expect("a drive");
+            let period_s = machine.sampling.period_s;
+            let mut samples = 0;
+            for m in b.moves.iter().filter(|m| m.count > 0) {
+                let works = &b.pieces[m.first..m.first + m.count];
+                for fit in [Fit::Envelope, Fit::Swing] {
+                    let states = checker.move_states(works, r, fit);
+                    let mut check = |s: crate::resample::Sample| {
+                        samples += 1;
+                        for i in 0..3 {
+                            let inside = |x: Interval, v: f64| x.lo <= v && v <= x.hi;
+                            assert!(inside(states.pos_mm[i], s.pos_mm[i]), "line {}", m.line);
+                            assert!(inside(states.vel_mm_s[i], s.vel_mm_s[i]), "line {}", m.line);
+                            assert!(
+                                inside(states.acc_mm_s2[i], s.acc_mm_s2[i]),
+                                "line {}",
+                                m.line
+                            );
+                        }
+                    };
+                    for w in works {
+                        sample_piece(w, Some(r), period_s, &mut check);
+                    }
+                }
+            }
+            assert!(samples > 10_000, "{samples}");
+        }
+    }
+
     /// Every move a bound lets go in its own box goes with the groups too (halving a group
     /// loses none), and every move the groups let go is below the run's peaks in its dense
     /// samples (a group's bound holds each of its moves). The run's peaks are 0.9 of the
@@ -200,19 +257,7 @@ mod tests {
     #[test]
     fn groups_let_go_what_single_moves_do_and_only_what_is_below() {
         for shaped in [false, true] {
-            let mut machine = kossel_machine();
-            machine.drive = Drive::Spring(Spring {
-                frequency_hz: 55.0,
-                damping_ratio: 0.08,
-            });
-            if shaped {
-                machine.input_shaper.x = Some(AxisShaper {
-                    kind: ShaperType::Mzv,
-                    freq_hz: 40.0,
-                    damping_ratio: 0.1,
-                });
-                machine.input_shaper.y = machine.input_shaper.x;
-            }
+            let machine = machine(shaped);
             let b = batch(&machine);
             let checker = MoveChecker::new(&machine, ());
             let mut scratch = Box::<Scratch>::default();
