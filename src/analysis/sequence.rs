@@ -160,6 +160,7 @@ impl Sequencer {
     /// Hands out the batch built so far. Unless `complete`, its last line may go on: the
     /// next batch starts with a part of the same group, which the results join.
     pub fn take_batch(&mut self, complete: bool) -> Batch {
+        self.merge_checked_into_open();
         let next = self.spare.take().unwrap_or_default();
         let mut batch = std::mem::replace(&mut self.batch, next);
         if !complete && let Some(open) = batch.moves.last_mut() {
@@ -250,9 +251,10 @@ impl Sequencer {
         }
         let work = PieceWork::new(&piece, kicks, end_sample, self.corner_until_s);
         let line = seg.line;
-        self.merge_checked_into_open();
         let starts_group = self.batch.moves.last().is_none_or(|m| m.line != line);
         if starts_group {
+            // Every check of the open group's line has come: its pieces have all come.
+            self.merge_checked_into_open();
             self.open_line(line);
         }
         self.batch.pieces.push(work);
@@ -262,7 +264,8 @@ impl Sequencer {
     }
 
     /// The checks of further planned moves of the open group's line (an arc's chords after
-    /// its first) go into it.
+    /// its first) go into it: when the group closes (a piece of another line comes, the
+    /// batch is handed out, the motion ends), since a move's checks come before its pieces.
     fn merge_checked_into_open(&mut self) {
         let Some(open) = self.batch.moves.last_mut() else {
             return;
