@@ -160,7 +160,6 @@ impl Sequencer {
     /// Hands out the batch built so far. Unless `complete`, its last line may go on: the
     /// next batch starts with a part of the same group, which the results join.
     pub fn take_batch(&mut self, complete: bool) -> Batch {
-        self.merge_checked_into_open();
         let next = self.spare.take().unwrap_or_default();
         let mut batch = std::mem::replace(&mut self.batch, next);
         if !complete && let Some(open) = batch.moves.last_mut() {
@@ -264,8 +263,9 @@ impl Sequencer {
     }
 
     /// The checks of further planned moves of the open group's line (an arc's chords after
-    /// its first) go into it: when the group closes (a piece of another line comes, the
-    /// batch is handed out, the motion ends), since a move's checks come before its pieces.
+    /// its first) go into it: when the group closes (a piece of another line comes, the motion
+    /// ends), since a move's checks come before its pieces. (A group split between batches
+    /// gets them in its last part; the results join the parts.)
     fn merge_checked_into_open(&mut self) {
         let Some(open) = self.batch.moves.last_mut() else {
             return;
