@@ -223,10 +223,38 @@ pub fn sample_piece(
 /// How many samples [`sample_piece`] takes of `work`: its start, the grid points inside,
 /// its end when asked.
 pub fn piece_samples(work: &PieceWork, period_s: f64) -> u64 {
+    let t0 = work.commanded.t0_s;
+    samples_within(work, first_inside(t0, period_s), period_s).0
+}
+
+/// [`piece_samples`] of consecutive pieces, summed: where a piece starts exactly where the
+/// one before it ends, its first grid point inside comes from that end's grid index
+/// instead of a second division (a box of a whole move is offered with its count).
+pub fn move_samples(works: &[PieceWork], period_s: f64) -> u64 {
+    let mut count = 0;
+    let mut end: Option<(f64, i64)> = None;
+    for w in works {
+        let t0 = w.commanded.t0_s;
+        let first = match end {
+            Some((t1, k)) if t1 == t0 => first_after(k, t0, period_s),
+            _ => first_inside(t0, period_s),
+        };
+        let (n, k) = samples_within(w, first, period_s);
+        count += n;
+        end = Some((w.commanded.t1_s(), k));
+    }
+    count
+}
+
+/// The samples of `work` whose first grid point inside is `first`; with the grid index at
+/// its end ([`first_grid_index`]).
+#[inline(always)]
+fn samples_within(work: &PieceWork, first: i64, period_s: f64) -> (u64, i64) {
     let seg = &work.commanded;
     let (t0, t1) = (seg.t0_s, seg.t1_s());
-    let inside = (first_grid_index(t1, period_s) - first_inside(t0, period_s)).max(0) as u64;
-    1 + inside + u64::from(work.end_sample && t1 > t0)
+    let end = first_grid_index(t1, period_s);
+    let inside = (end - first).max(0) as u64;
+    (1 + inside + u64::from(work.end_sample && t1 > t0), end)
 }
 
 /// How closely a box of a whole piece fits its actual accelerations.
@@ -293,7 +321,12 @@ impl RawBox {
 
 /// The first grid index strictly after `t0`: the piece's first grid point inside.
 fn first_inside(t0: f64, period_s: f64) -> i64 {
-    let k = first_grid_index(t0, period_s);
+    first_after(first_grid_index(t0, period_s), t0, period_s)
+}
+
+/// [`first_inside`] of `t0`, from its [`first_grid_index`] `k`.
+#[inline(always)]
+fn first_after(k: i64, t0: f64, period_s: f64) -> i64 {
     if k as f64 * period_s <= t0 { k + 1 } else { k }
 }
 

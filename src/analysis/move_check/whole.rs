@@ -8,7 +8,7 @@ use crate::analysis::sequence::MoveWork;
 use crate::delta::ForceBounds;
 use crate::motion::drive::Response;
 use crate::report::share;
-use crate::resample::{Fit, PieceWork, SPARSE_MIN_SAMPLES, StateBox, piece_raw, piece_samples};
+use crate::resample::{Fit, PieceWork, SPARSE_MIN_SAMPLES, StateBox, move_samples, piece_raw};
 
 use super::MAX_SAMPLES_PER_PIECE;
 
@@ -109,14 +109,14 @@ impl<O: Observer> MoveChecker<'_, O> {
     fn whole_box(&self, works: &[PieceWork]) -> Option<WholeMove> {
         let r = self.response.as_ref()?;
         let period_s = self.machine.sampling.period_s;
-        // In one pass: whether every piece is sampled, and how many samples.
-        let mut count = 0;
-        for w in works {
-            if w.commanded.dt_s > MAX_SAMPLES_PER_PIECE * period_s {
-                return None;
-            }
-            count += piece_samples(w, period_s);
+        // Whether every piece is sampled, without a branch per piece.
+        let sampled = works.iter().fold(true, |all, w| {
+            all & (w.commanded.dt_s <= MAX_SAMPLES_PER_PIECE * period_s)
+        });
+        if !sampled {
+            return None;
         }
+        let count = move_samples(works, period_s);
         if count < SPARSE_MIN_SAMPLES || works.is_empty() {
             return None;
         }

@@ -349,3 +349,33 @@ fn the_peak_candidates_are_samples() {
     });
     assert_eq!(n, 4);
 }
+
+proptest::proptest! {
+    /// A chain's count is its pieces' counts summed, whether each piece starts where the
+    /// one before it ends (then the end's grid index is reused), on a grid point, or
+    /// elsewhere (a re-homing); and it is the samples `sample_piece` takes.
+    #[test]
+    fn a_chains_count_is_its_pieces_counts(
+        pieces in proptest::collection::vec((0.0..0.004f64, 0u8..4, proptest::bool::ANY), 1..12),
+        start in 0.0..0.01f64,
+    ) {
+        let mut t = start;
+        let mut works = Vec::new();
+        for (dt, kind, end_sample) in pieces {
+            // 0: contiguous; 1: starts on the next grid point; 2: a gap; 3: zero length.
+            match kind {
+                1 => t = (t / TS).ceil() * TS,
+                2 => t += 0.0027,
+                _ => {}
+            }
+            let dt = if kind == 3 { 0.0 } else { dt };
+            let s = seg(t, dt, Vec3::zeros(), Vec3::zeros(), Vec3::zeros());
+            works.push(work(s, Kicks::default(), end_sample));
+            t = s.t1_s();
+        }
+        let summed: u64 = works.iter().map(|w| piece_samples(w, TS)).sum();
+        let taken: usize = works.iter().map(|w| samples(w, None).len()).sum();
+        proptest::prop_assert_eq!(move_samples(&works, TS), summed);
+        proptest::prop_assert_eq!(summed, taken as u64);
+    }
+}
