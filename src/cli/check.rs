@@ -1,6 +1,6 @@
 //! `delta-gcode check FILE... --machine M.yaml`: the verdict on each file.
 
-use std::io::Write;
+use std::io::{BufWriter, Write};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -88,7 +88,9 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
             }
         }
     }
-    let mut out = stdout();
+    // Buffered: standard output alone is line-buffered, one write per line of the report
+    // (139,590 system calls for `--all-moves` on a 0.3 MB file).
+    let mut out = BufWriter::with_capacity(1 << 16, stdout());
     match args.format {
         Format::Json => write_json(&mut out, &reports)?,
         Format::Text => {
@@ -96,6 +98,7 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
                 if i > 0 {
                     writeln!(out)?;
                 }
+                out.flush()?; // the previous report before this one's diagnostics (stderr)
                 print_diagnostics(r, args.verbose.verbose);
                 write_text(&mut out, r)?;
             }

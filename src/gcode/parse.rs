@@ -23,6 +23,7 @@
 
 mod grammar;
 
+use arrayvec::ArrayVec;
 use nom::combinator::iterator;
 
 use super::Severity;
@@ -135,54 +136,16 @@ impl LineDiag {
     }
 }
 
-/// Fixed-capacity list, so a parsed line needs no allocation.
-#[derive(Clone, Copy, Debug)]
-pub struct Fixed<T: Copy, const N: usize> {
-    items: [T; N],
-    len: usize,
-}
-
-impl<T: Copy, const N: usize> Fixed<T, N> {
-    const fn new(fill: T) -> Self {
-        Fixed {
-            items: [fill; N],
-            len: 0,
-        }
-    }
-
-    /// Appends; false when full.
-    fn push(&mut self, t: T) -> bool {
-        if self.len == N {
-            return false;
-        }
-        self.items[self.len] = t;
-        self.len += 1;
-        true
-    }
-
-    pub fn as_slice(&self) -> &[T] {
-        &self.items[..self.len]
-    }
-}
-
-const NO_WORD: Word = Word {
-    letter: 0,
-    value: None,
-    column: 0,
-};
-const NO_DIAG: LineDiag = LineDiag {
-    column: 0,
-    severity: Severity::Warning,
-    kind: DiagKind::TooManyWords,
-};
-
 /// One parsed line, borrowing its bytes.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct ParsedLine<'a> {
     pub command: Command<'a>,
     /// `N` line number, if given.
     pub line_number: Option<u64>,
-    words: Fixed<Word, MAX_WORDS>,
+    /// Fixed capacity, so a parsed line needs no allocation; uninitialised until pushed,
+    /// so it costs nothing to make (an array filled with a blank word was 600 bytes to copy
+    /// per line).
+    words: ArrayVec<Word, MAX_WORDS>,
     /// The whole line (for columns) and an extended command's arguments.
     line: &'a [u8],
     args: &'a [u8],
@@ -192,12 +155,12 @@ pub struct ParsedLine<'a> {
     pub comment: Option<&'a [u8]>,
     /// `*` checksum as written, if any.
     pub checksum: Option<u32>,
-    diags: Fixed<LineDiag, MAX_DIAGS>,
+    diags: ArrayVec<LineDiag, MAX_DIAGS>,
 }
 
 impl<'a> ParsedLine<'a> {
     pub fn words(&self) -> &[Word] {
-        self.words.as_slice()
+        &self.words
     }
 
     /// An extended command's parameters, in order (read on demand: they are rare).
@@ -209,7 +172,7 @@ impl<'a> ParsedLine<'a> {
     }
 
     pub fn diags(&self) -> &[LineDiag] {
-        self.diags.as_slice()
+        &self.diags
     }
 
     /// The last word with this (upper-case) letter.
@@ -242,17 +205,15 @@ impl<'a> ParsedLine<'a> {
     fn diag(&mut self, column: u32, severity: Severity, kind: DiagKind) {
         // Past the capacity, later diagnostics of the line are dropped; an error replaces
         // the last warning so that it is never lost.
-        if !self.diags.push(LineDiag {
+        let diag = LineDiag {
             column,
             severity,
             kind,
-        }) && severity == Severity::Error
+        };
+        if let Err(full) = self.diags.try_push(diag)
+            && severity == Severity::Error
         {
-            self.diags.items[MAX_DIAGS - 1] = LineDiag {
-                column,
-                severity,
-                kind,
-            };
+            self.diags[MAX_DIAGS - 1] = full.element();
         }
     }
 }
@@ -291,69 +252,84 @@ fn column(line: &[u8], rest: &[u8]) -> u32 {
 
 /// Parses one line (with or without its terminator).
 pub fn parse_line(line: &[u8]) -> ParsedLine<'_> {
-    let line = strip_terminator(line);
-    let mut p = ParsedLine {
-        command: Command::None,
-        line_number: None,
-        words: Fixed::new(NO_WORD),
-        line,
-        args: b"",
-        text: None,
-        comment: None,
-        checksum: None,
-        diags: Fixed::new(NO_DIAG),
-    };
-    let (mut code, comment, last_star) = grammar::code_and_comment(line);
-    p.comment = comment;
-    if let Some(star) = last_star
-        && let Ok((_, written)) = grammar::checksum(&code[star..])
-    {
-        let computed = line[..star].iter().fold(0u8, |a, &b| a ^ b);
-        p.checksum = Some(written);
-        if u32::from(computed) != written {
-            let kind = DiagKind::Checksum { computed, written };
-            p.diag((star + 1) as u32, Severity::Warning, kind);
+    let mut p = ParsedLine::blank(line);
+    p.parse();
+    p
+}
+
+impl<'a> ParsedLine<'a> {
+    /// The line, not parsed yet: [`Self::parse`] fills it in place. (A hot caller uses the
+    /// two in place of [`parse_line`]: a parsed line is 576 bytes, and returning one built
+    /// in a local copied them all once more per line.)
+    pub fn blank(line: &'a [u8]) -> ParsedLine<'a> {
+        ParsedLine {
+            command: Command::None,
+            line_number: None,
+            words: ArrayVec::new_const(),
+            line: strip_terminator(line),
+            args: b"",
+            text: None,
+            comment: None,
+            checksum: None,
+            diags: ArrayVec::new_const(),
         }
-        code = &code[..star];
     }
-    let (rest, line_number) = grammar::line_start(code);
-    p.line_number = line_number;
-    match grammar::command(rest) {
-        Ok((args, Head::Extended(name))) => {
-            p.command = Command::Extended {
-                name,
-                column: column(line, name),
-            };
-            p.args = args;
-            for arg in iterator(args, grammar::argument) {
-                if let Err((at, kind)) = arg {
-                    p.diag(column(line, at), Severity::Warning, kind);
+
+    /// Parses the line given to [`Self::blank`].
+    pub fn parse(&mut self) {
+        let line = self.line;
+        let p = self;
+        let (mut code, comment, last_star) = grammar::code_and_comment(line);
+        p.comment = comment;
+        if let Some(star) = last_star
+            && let Ok((_, written)) = grammar::checksum(&code[star..])
+        {
+            let computed = line[..star].iter().fold(0u8, |a, &b| a ^ b);
+            p.checksum = Some(written);
+            if u32::from(computed) != written {
+                let kind = DiagKind::Checksum { computed, written };
+                p.diag((star + 1) as u32, Severity::Warning, kind);
+            }
+            code = &code[..star];
+        }
+        let (rest, line_number) = grammar::line_start(code);
+        p.line_number = line_number;
+        match grammar::command(rest) {
+            Ok((args, Head::Extended(name))) => {
+                p.command = Command::Extended {
+                    name,
+                    column: column(line, name),
+                };
+                p.args = args;
+                for arg in iterator(args, grammar::argument) {
+                    if let Err((at, kind)) = arg {
+                        p.diag(column(line, at), Severity::Warning, kind);
+                    }
                 }
             }
-        }
-        Ok((
-            args,
-            Head::Code {
-                letter,
-                number,
-                subcode,
-            },
-        )) => {
-            p.command = Command::Code {
-                letter,
-                number,
-                subcode,
-                column: column(line, rest),
-            };
-            if subcode.is_none() && takes_text(letter, number) {
-                p.text = Some(grammar::free_text(args));
-            } else {
-                classic_words(&mut p, args);
+            Ok((
+                args,
+                Head::Code {
+                    letter,
+                    number,
+                    subcode,
+                },
+            )) => {
+                p.command = Command::Code {
+                    letter,
+                    number,
+                    subcode,
+                    column: column(line, rest),
+                };
+                if subcode.is_none() && takes_text(letter, number) {
+                    p.text = Some(grammar::free_text(args));
+                } else {
+                    classic_words(p, args);
+                }
             }
+            Err(_) => classic_words(p, rest),
         }
-        Err(_) => classic_words(&mut p, rest),
     }
-    p
 }
 
 /// The words of a classic command, `( )` comments in between, with their diagnostics.
@@ -403,11 +379,12 @@ fn classic_words<'a>(p: &mut ParsedLine<'a>, args: &'a [u8]) {
                     p.diag(col, Severity::Warning, DiagKind::DuplicateWord(letter));
                 }
                 seen |= bit;
-                if !p.words.push(Word {
+                let word = Word {
                     letter,
                     value,
                     column: col,
-                }) {
+                };
+                if p.words.try_push(word).is_err() {
                     p.diag(col, Severity::Warning, DiagKind::TooManyWords);
                     return;
                 }

@@ -27,7 +27,7 @@ pub use retract::Retraction;
 
 use super::arc::Plane;
 use super::dialect::{self, Dialect, FirmwareKind};
-use super::parse::{Command, ParsedLine, parse_line};
+use super::parse::{Command, ParsedLine};
 use super::reader::BUFFER_BYTES;
 use super::{ArcChord, Diagnostic, Event, LimitChange, MarlinChange, Move, Severity, marlin};
 use crate::path::{Path, Vec3};
@@ -194,7 +194,8 @@ impl Interpreter {
         if !self.flavour_read && bytes.first() == Some(&b';') {
             self.flavour(bytes, d);
         }
-        let p = parse_line(bytes);
+        let mut p = ParsedLine::blank(bytes);
+        p.parse();
         for diag in p.diags() {
             d.push(diag.column, diag.severity, diag.message());
         }

@@ -12,7 +12,9 @@
 //! pass, the innermost loop of the parser: `fold_many0(byte(digit), ..)` does the same
 //! with 1.4 % more instructions and 15 % more branch misses over the whole parse
 //! (cachegrind, the 27.8 MB bunny), `digit0` and a second pass with 9 % and 34 % more.
-//! Everything else is nom's.
+//! The search for a line's comment or checksum is memchr's, many bytes at a time (nom's
+//! `take_till` looks at one byte per step: 2.4 % of `check`'s instructions). Everything
+//! else is nom's.
 
 use nom::{
     IResult, Parser,
@@ -56,11 +58,11 @@ fn byte_eq(b: u8) -> impl Fn(&[u8]) -> Res<'_, u8> {
 /// With it, where the code part's last `*` is: the only place a checksum can start.
 #[inline]
 pub(super) fn code_and_comment(line: &[u8]) -> (&[u8], Option<&[u8]>, Option<usize>) {
-    // One pass to the first `;` or `*`; a second one only after a `*` (rare).
-    let special = take_till::<_, _, ()>(|c| c == b';' || c == b'*').parse(line);
-    match special {
-        Ok(([], _)) => (line, None, None),
-        Ok(([b';', comment @ ..], code)) => (code, Some(comment), None),
+    // One pass to the first `;` or `*` (memchr's, many bytes at a time); a second one only
+    // after a `*` (rare).
+    match memchr::memchr2(b';', b'*', line).map(|i| line.split_at(i)) {
+        None => (line, None, None),
+        Some((code, [b';', comment @ ..])) => (code, Some(comment), None),
         _ => {
             let (comment, code) = match (take_till(|c| c == b';'), byte_eq(b';')).parse(line) {
                 Ok((comment, (code, _))) => (Some(comment), code),
