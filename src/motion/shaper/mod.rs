@@ -37,6 +37,10 @@ pub struct Shaper {
     break_slots: usize,
     /// Each slot's offset, s.
     offsets: [f64; window::MAX_OFFSETS],
+    /// Each slot's last answer of [`Self::next_break`] (a planned break, or infinity for
+    /// none), still the answer while it lies beyond the time asked and no piece came since;
+    /// −∞ when it must be asked again.
+    breaks: [f64; window::MAX_OFFSETS],
     /// Commanded motion is out up to here.
     t_out: f64,
     /// No piece has come since the start or the last re-homing.
@@ -74,6 +78,7 @@ impl Shaper {
             slots,
             break_slots,
             offsets,
+            breaks: [f64::NEG_INFINITY; window::MAX_OFFSETS],
             t_out: f64::NEG_INFINITY,
             fresh: true,
             pending: None,
@@ -117,6 +122,8 @@ impl Shaper {
         }
         let known_s = seg.t1_s();
         self.planned.push(seg);
+        // A slot without a later planned start saw the end of the last piece, or nothing.
+        self.breaks = [f64::NEG_INFINITY; window::MAX_OFFSETS];
         self.emit_until(known_s - self.tau_hi, out);
     }
 
@@ -133,6 +140,7 @@ impl Shaper {
             self.emit_until(end, out);
         }
         self.planned.clear();
+        self.breaks = [f64::NEG_INFINITY; window::MAX_OFFSETS];
         self.fresh = true;
     }
 
@@ -153,20 +161,26 @@ impl Shaper {
     /// The first break of the commanded motion after `t` (never smaller than at the last
     /// call): a planned break b seen by a pulse of offset τ is at b − τ; the planned breaks
     /// themselves (offset 0) split the pieces by planned move too.
+    ///
+    /// A slot's break is found again only once `t` has passed it (or a piece came): the
+    /// first planned start after t + τ is still the one found for an earlier t as long as
+    /// it lies beyond t + τ, since the starts before it lay before the earlier t + τ.
     fn next_break(&mut self, t: f64) -> f64 {
         let mut best = f64::INFINITY;
         for slot in 0..self.break_slots {
             let tau = self.offsets[slot];
             // Breaks of the planned motion after t + τ: the pieces' starts and the end.
             let want = t + tau + 1e-12;
-            let i = self.planned.next_start(slot, want);
-            let found = match self.planned.get(i) {
-                Some(s) => Some(s.t0_s),
-                None => self.planned.back().map(Segment::t1_s).filter(|&b| b > want),
-            };
-            if let Some(b) = found {
-                best = best.min(b - tau);
+            if self.breaks[slot] <= want {
+                let i = self.planned.next_start(slot, want);
+                self.breaks[slot] = match self.planned.get(i) {
+                    Some(s) => s.t0_s,
+                    None => (self.planned.back().map(Segment::t1_s))
+                        .filter(|&b| b > want)
+                        .unwrap_or(f64::INFINITY),
+                };
             }
+            best = best.min(self.breaks[slot] - tau);
         }
         best
     }

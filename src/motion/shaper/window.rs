@@ -16,16 +16,19 @@ const COMPACT_MIN: usize = 64;
 /// The most offsets looked up: the planned motion itself and every pulse of both axes.
 pub const MAX_OFFSETS: usize = 1 + 2 * MAX_PULSES;
 
-/// Planned pieces in time order, with a forward-only cursor per offset.
+/// Planned pieces in time order, with a forward-only cursor per offset. An index it
+/// hands out is into its pieces, valid until the next [`Self::pop_front`] or
+/// [`Self::clear`].
 #[derive(Default)]
 pub struct Window {
     /// The pieces from `head` on; those before it are dropped, and removed from the vector
     /// a batch at a time ([`Self::pop_front`]): indexing stays a plain slice lookup, where a
     /// ring buffer's wraps around at every question.
     pieces: Vec<Segment>,
+    /// Each piece's start and end, apart: the cursors walk these, 16 bytes a piece where a
+    /// `Segment` is 104.
+    times: Vec<[f64; 2]>,
     head: usize,
-    /// The count of pieces ever dropped: a cursor is an index into everything ever pushed.
-    dropped: usize,
     /// Per offset: the first piece that started after the last `next_start` question.
     starts: [usize; MAX_OFFSETS],
     /// Per offset: the first piece that ended after the last `in_force` question.
@@ -34,6 +37,7 @@ pub struct Window {
 
 impl Window {
     pub fn push(&mut self, seg: Segment) {
+        self.times.push([seg.t0_s, seg.t1_s()]);
         self.pieces.push(seg);
     }
 
@@ -53,19 +57,23 @@ impl Window {
         self.pieces.len() - self.head
     }
 
+    /// The piece at an index this window handed out.
     #[inline(always)]
     pub fn get(&self, i: usize) -> Option<&Segment> {
-        self.live().get(i)
+        self.pieces.get(i)
     }
 
     pub fn pop_front(&mut self) {
         if self.head < self.pieces.len() {
             self.head += 1;
-            self.dropped += 1;
             // The dropped pieces go once they are as many as the live ones: each piece is
             // moved at most once on average.
             if self.head >= COMPACT_MIN && self.head >= self.len() {
                 self.pieces.drain(..self.head);
+                self.times.drain(..self.head);
+                for c in self.starts.iter_mut().chain(&mut self.ends) {
+                    *c = c.saturating_sub(self.head);
+                }
                 self.head = 0;
             }
         }
@@ -73,22 +81,22 @@ impl Window {
 
     /// Drops every piece; the questions start again from the next piece pushed.
     pub fn clear(&mut self) {
-        self.dropped += self.len();
         self.pieces.clear();
+        self.times.clear();
         self.head = 0;
-        self.starts = [self.dropped; MAX_OFFSETS];
-        self.ends = [self.dropped; MAX_OFFSETS];
+        self.starts = [0; MAX_OFFSETS];
+        self.ends = [0; MAX_OFFSETS];
     }
 
-    /// The index (in the window) of the first piece starting after `t`, asked for offset
-    /// `k` with `t` never smaller than at its last question (since the last `clear`).
+    /// The index of the first piece starting after `t`, asked for offset `k` with `t`
+    /// never smaller than at its last question (since the last `clear`).
     #[inline(always)]
     pub fn next_start(&mut self, k: usize, t: f64) -> usize {
-        let mut i = self.starts[k].max(self.dropped) - self.dropped;
-        while self.get(i).is_some_and(|s| s.t0_s <= t) {
+        let mut i = self.starts[k].max(self.head);
+        while self.times.get(i).is_some_and(|s| s[0] <= t) {
             i += 1;
         }
-        self.starts[k] = i + self.dropped;
+        self.starts[k] = i;
         i
     }
 
@@ -97,7 +105,7 @@ impl Window {
     #[inline(always)]
     pub fn planned_at(&mut self, k: usize, t: f64) -> Option<usize> {
         let i = self.in_force(k, t);
-        self.get(i).filter(|s| s.t0_s <= t).map(|_| i)
+        self.times.get(i).filter(|s| s[0] <= t).map(|_| i)
     }
 
     /// Position, velocity and acceleration at `t` on piece `i` (extended as a polynomial),
@@ -121,11 +129,11 @@ impl Window {
     /// started), asked for offset `k` with `t` never decreasing, as for `next_start`.
     #[inline(always)]
     pub fn in_force(&mut self, k: usize, t: f64) -> usize {
-        let mut i = self.ends[k].max(self.dropped) - self.dropped;
-        while self.get(i).is_some_and(|s| s.t1_s() <= t) {
+        let mut i = self.ends[k].max(self.head);
+        while self.times.get(i).is_some_and(|s| s[1] <= t) {
             i += 1;
         }
-        self.ends[k] = i + self.dropped;
+        self.ends[k] = i;
         i
     }
 }
@@ -160,11 +168,11 @@ mod tests {
             }
         };
         push(&mut w, &mut t0, 40);
-        let bisect_start = |w: &Window, t: f64| w.live().partition_point(|s| s.t0_s <= t);
-        let bisect_end = |w: &Window, t: f64| w.live().partition_point(|s| s.t1_s() <= t);
+        let bisect_start = |w: &Window, t: f64| w.head + w.live().partition_point(|s| s.t0_s <= t);
+        let bisect_end = |w: &Window, t: f64| w.head + w.live().partition_point(|s| s.t1_s() <= t);
         let offsets = [0.0, -0.004, 0.0031, 0.012];
         let mut t = -0.01;
-        let (mut checked, mut compactions) = (0, 0);
+        let (mut checked, mut compactions, mut dropped) = (0, 0, 0);
         while t < t0 + 0.02 {
             for (k, tau) in offsets.iter().enumerate() {
                 assert_eq!(
@@ -178,6 +186,7 @@ mod tests {
             if w.front().is_some_and(|s| s.t1_s() < t - 0.005) {
                 let head = w.head;
                 w.pop_front();
+                dropped += 1;
                 compactions += usize::from(w.head < head);
             }
             // Pieces keep coming for a while: the dropped ones are removed from the vector
@@ -187,7 +196,7 @@ mod tests {
             }
             t += 0.00037;
         }
-        assert!(w.dropped > 3 * COMPACT_MIN, "{}", w.dropped);
+        assert!(dropped > 3 * COMPACT_MIN, "{dropped}");
         assert!(compactions > 2, "{compactions}");
         w.clear();
         push(&mut w, &mut t0, 3);
