@@ -48,6 +48,10 @@ pub struct Response {
     omega2: f64,
     sigma: f64,
     omega_d: f64,
+    /// −1/ω² (the lag a constant acceleration settles to, per mm/s²) and 1/ω_d, computed
+    /// once: a division per use was on the critical path of every piece's lag and box.
+    to_e: f64,
+    inv_wd: f64,
     /// The step h of [`Self::walk`] set by [`Self::with_step`], s, and its transition matrix.
     step: Option<(f64, [[f64; 2]; 2])>,
     /// The windows of [`Self::acceleration_range`].
@@ -58,11 +62,14 @@ impl Response {
     pub fn new(s: &Spring) -> Response {
         let omega = std::f64::consts::TAU * s.frequency_hz;
         let zeta = s.damping_ratio;
+        let omega_d = omega * (1.0 - zeta * zeta).sqrt();
         let mut r = Response {
             omega,
             omega2: omega * omega,
             sigma: zeta * omega,
-            omega_d: omega * (1.0 - zeta * zeta).sqrt(),
+            omega_d,
+            to_e: -1.0 / (omega * omega),
+            inv_wd: 1.0 / omega_d,
             step: None,
             windows: Windows::default(),
         };
@@ -125,10 +132,10 @@ impl Response {
             decay,
         } = turn;
         // u = e − e_p with e_p = −a_c/ω², the lag the constant acceleration settles to.
-        let e_p = a_c * (-1.0 / self.omega2);
+        let e_p = a_c * self.to_e;
         let u0 = start.e - e_p;
         let du0 = start.de;
-        let inv_wd = 1.0 / self.omega_d;
+        let inv_wd = self.inv_wd;
         let u = (u0 * c + (du0 + u0 * self.sigma) * (s * inv_wd)) * decay;
         let du = (du0 * c - (du0 * self.sigma + u0 * self.omega2) * (s * inv_wd)) * decay;
         Lag { e: e_p + u, de: du }
@@ -139,7 +146,7 @@ impl Response {
     /// one fixed linear step per instant instead of an exp and a sin/cos.
     pub fn walk(&self, start: &Lag, a_c: Vec3, tau0_s: f64, h_s: f64) -> LagWalk {
         let first = self.lag_at(start, a_c, tau0_s);
-        let e_p = a_c * (-1.0 / self.omega2);
+        let e_p = a_c * self.to_e;
         LagWalk {
             e_p,
             u: first.e - e_p,
@@ -157,13 +164,13 @@ impl Response {
     /// is at most e^(−σ·tau_s)·√(C² + D²) in magnitude, per axis; likewise ω²u + 2σu̇, by
     /// which the actual acceleration differs from −ω²e_p = a_c.
     pub fn ringing(&self, start: &Lag, a_c: Vec3, tau_s: f64) -> Ringing {
-        let e_p = a_c * (-1.0 / self.omega2);
+        let e_p = a_c * self.to_e;
         let u0 = start.e - e_p;
         // u = e^(−στ)(C cos ω_dτ + D sin ω_dτ) = e^(−στ)·R·cos(ω_dτ − φ), R = √(C² + D²),
         // C = u0, D = (u̇0 + σu0)/ω_d (see `lag_at`). Its rate and ω²u + 2σu̇ are the same
         // damped sinusoid turned and scaled: amplitudes R·√(σ² + ω_d²) = ωR and
         // R·√((ω² − 2σ²)² + 4σ²ω_d²) = ω²R. One square root per axis.
-        let d = (start.de + u0 * self.sigma) * (1.0 / self.omega_d);
+        let d = (start.de + u0 * self.sigma) * self.inv_wd;
         // From the start (a whole piece) the decay is 1: no exp.
         let decay = if tau_s > 0.0 {
             (-self.sigma * tau_s).exp()

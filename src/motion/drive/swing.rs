@@ -108,7 +108,7 @@ impl Response {
             turn: [[m00, m01], [m10, m11]],
             decay,
         } = &self.windows;
-        let (w2, two_sigma, to_e) = (self.omega2, 2.0 * self.sigma, -1.0 / self.omega2);
+        let (w2, two_sigma, to_e) = (self.omega2, 2.0 * self.sigma, self.to_e);
         let at = |u: &[f64; 3], du: &[f64; 3]| {
             let w: [f64; 3] = std::array::from_fn(|i| w2 * u[i] + two_sigma * du[i]);
             End {
