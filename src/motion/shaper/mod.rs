@@ -14,6 +14,7 @@ pub use pulses::{
 };
 
 use super::{CONTINUITY_MM, Segment};
+use crate::interval::lesser;
 use window::Window;
 
 /// The commanded motion of a planned one, as a stream: planned pieces in, commanded pieces
@@ -180,7 +181,8 @@ impl Shaper {
                         .unwrap_or(f64::INFINITY),
                 };
             }
-            best = best.min(self.breaks[slot] - tau);
+            // Never NaN (a time, or ±∞ less a finite offset): a plain comparison.
+            best = lesser(best, self.breaks[slot] - tau);
         }
         best
     }
