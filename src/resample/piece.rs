@@ -426,8 +426,10 @@ impl Grid<'_> {
         let ring = self.response.ringing(&work.lag, seg.a, ta);
         let pos = |i: usize| {
             let mut pos = Interval::hull(pa[i], pb[i]);
-            // The parabola's vertex, where the velocity changes sign inside the run.
-            if seg.a[i] != 0.0 {
+            // The parabola's vertex, where the velocity changes sign inside the run: only
+            // when the ends' velocities have opposite signs is the division paid (the vertex
+            // a rounding away from an end, which this may miss, is within the slack).
+            if va[i] * vb[i] < 0.0 {
                 let tv = -seg.v[i] / seg.a[i];
                 if tv > ta && tv < tb {
                     let pv = seg.p[i] + seg.v[i] * tv + seg.a[i] * (0.5 * tv * tv);
