@@ -5,7 +5,7 @@
 //! over consecutive pieces has every grid point once.
 
 use super::{Phase, Sample, SampleSink, StateBox};
-use crate::interval::Interval;
+use crate::interval::{Interval, greater};
 use crate::motion::Segment;
 use crate::motion::drive::{ActualPiece, Lag, LagWalk, Response};
 use crate::path::Vec3;
@@ -299,7 +299,8 @@ impl RawBox {
     pub fn join(&self, o: &RawBox) -> RawBox {
         RawBox {
             states: self.states.join(&o.states),
-            ring: std::array::from_fn(|q| self.ring[q].sup(&o.ring[q])),
+            // Amplitudes, never NaN: a plain comparison, not nalgebra's `sup`.
+            ring: std::array::from_fn(|q| self.ring[q].zip_map(&o.ring[q], greater)),
         }
     }
 
@@ -422,7 +423,15 @@ impl Grid<'_> {
     fn raw(&self, ta: f64, tb: f64, fit: Fit) -> RawBox {
         let work = self.work;
         let seg = &work.commanded;
-        let ((pa, va, _), (pb, vb, _)) = (seg.at(ta), seg.at(tb));
+        // At 0 the piece's own start (a whole piece's box, where `ta` is the constant 0):
+        // p + v·0 + a·0 is p but for the sign of a zero.
+        let (pa, va) = if ta == 0.0 {
+            (seg.p, seg.v)
+        } else {
+            let (p, v, _) = seg.at(ta);
+            (p, v)
+        };
+        let (pb, vb, _) = seg.at(tb);
         let ring = self.response.ringing(&work.lag, seg.a, ta);
         let pos = |i: usize| {
             let mut pos = Interval::hull(pa[i], pb[i]);
