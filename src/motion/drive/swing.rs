@@ -95,6 +95,10 @@ impl Response {
     /// their ends reached by a fixed turn of (u, u̇), the last one's end being `end`: over
     /// each, w's range is its ends' hull, widened where the window holds an extremum
     /// ([`Range::window`]); a piece longer than that gets the envelope from there on.
+    ///
+    /// Inlined into the box of a piece: out of line, its arguments and result went through
+    /// memory (3.6 % of a default run's worker instructions more).
+    #[inline(always)]
     pub fn acceleration_range(
         &self,
         start: &Lag,
