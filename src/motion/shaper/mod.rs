@@ -166,6 +166,7 @@ impl Shaper {
     /// A slot's break is found again only once `t` has passed it (or a piece came): the
     /// first planned start after t + τ is still the one found for an earlier t as long as
     /// it lies beyond t + τ, since the starts before it lay before the earlier t + τ.
+    #[inline(always)]
     fn next_break(&mut self, t: f64) -> f64 {
         let mut best = f64::INFINITY;
         for slot in 0..self.break_slots {
@@ -189,6 +190,7 @@ impl Shaper {
 
     /// The commanded piece over [ta, tb), inside which no pulse crosses a planned break
     /// (`ta` never smaller than at the last call).
+    #[inline(always)]
     fn piece(&mut self, ta: f64, tb: f64) -> Segment {
         let mid = 0.5 * (ta + tb);
         let planned = &mut self.planned;
@@ -239,13 +241,10 @@ impl Shaper {
     }
 
     /// Drops the planned pieces no pulse will look at again.
+    #[inline(always)]
     fn drop_unneeded(&mut self) {
-        while self.planned.len() > 1
-            && self
-                .planned
-                .front()
-                .is_some_and(|s| s.t1_s() < self.t_out + self.tau_lo)
-        {
+        let done_s = self.t_out + self.tau_lo;
+        while self.planned.len() > 1 && self.planned.front_end_s().is_some_and(|t| t < done_s) {
             self.planned.pop_front();
         }
     }

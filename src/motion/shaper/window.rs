@@ -49,6 +49,12 @@ impl Window {
         self.live().first()
     }
 
+    /// The first piece's end, s (from the times, not the piece).
+    #[inline(always)]
+    pub fn front_end_s(&self) -> Option<f64> {
+        self.times.get(self.head).map(|t| t[1])
+    }
+
     pub fn back(&self) -> Option<&Segment> {
         self.live().last()
     }
