@@ -7,11 +7,11 @@ use std::collections::VecDeque;
 
 use crate::gcode::Move;
 use crate::machine::Machine;
-use crate::motion::drive::{ActualPiece, Drive, DriveStage, Response};
-use crate::motion::{CONTINUITY_MM, Segment};
+use crate::motion::Segment;
+use crate::motion::drive::{Drive, DriveStage, DriveStep, Response};
 use crate::path::Vec3;
 use crate::report::{MoveStats, PathChecks};
-use crate::resample::{JUMP_MIN_MM_S, Kicks, PieceWork};
+use crate::resample::{Edge, JUMP_MIN_MM_S, Kicks, PieceWork};
 
 use super::Observer;
 use super::move_check::MoveChecker;
@@ -61,9 +61,11 @@ pub struct Sequencer {
     period_s: f64,
     response: Option<Response>,
     drive: DriveStage,
-    /// The last actual piece, held back until the next one tells its end (rigid impulses,
-    /// the end sample), with the duration of the one before it.
-    held: Option<(ActualPiece, f64)>,
+    /// The batch's last piece is open: the next piece tells its end (the end sample, the
+    /// rigid model's impulses), see [`Self::close_last`].
+    open: Option<Open>,
+    /// The duration of the last piece, s.
+    last_dt: f64,
     corner_until_s: f64,
     /// Lines whose planned moves were checked but whose pieces have not come yet.
     checked: VecDeque<Checked>,
@@ -73,6 +75,15 @@ pub struct Sequencer {
     group: u64,
     /// The commanded motion's first start and last end, s.
     span_s: Option<(f64, f64)>,
+}
+
+/// What closing the batch's last piece needs besides its successor ([`Sequencer::close_last`]).
+#[derive(Clone, Copy)]
+struct Open {
+    /// The commanded velocity jump at its start, mm/s.
+    jump: Vec3,
+    /// The duration of the piece before it, s.
+    prev_dt: f64,
 }
 
 /// What the checks on a move's path found (see [`checks`]), with where it ends on the bed.
@@ -107,7 +118,8 @@ impl Sequencer {
                 Drive::Spring(s) => Some(Response::new(s)),
             },
             drive: DriveStage::new(&machine.drive),
-            held: None,
+            open: None,
+            last_dt: 0.0,
             corner_until_s: f64::NEG_INFINITY,
             checked: VecDeque::new(),
             batch: Batch::default(),
@@ -129,23 +141,27 @@ impl Sequencer {
             None => (c.t0_s, c.t1_s()),
             Some((a, _)) => (a, c.t1_s()),
         });
-        let piece = self.drive.push(&c);
-        self.actual(piece);
+        self.piece(c);
+    }
+
+    /// The next commanded piece, through the drive: the last one closed, this one added.
+    #[inline(always)]
+    fn piece(&mut self, c: Segment) {
+        let step = self.drive.push(&c);
+        self.close_last(Some((&c, &step)));
+        self.add(c, &step);
     }
 
     /// The end of the motion: the drive's settling, the last piece, the lines checked
     /// that had no piece.
     pub fn finish(&mut self) {
-        if let (Some(r), Some((last, _))) = (&self.response, &self.held) {
+        if let (Some(r), Some(last)) = (&self.response, self.open.and(self.batch.pieces.last())) {
             let seg = last.commanded;
             let (p, _) = seg.end();
             let settle = Segment::rest(seg.t1_s(), SETTLE_PERIODS * r.period_s(), p, seg.line);
-            let piece = self.drive.push(&settle);
-            self.actual(piece);
+            self.piece(settle);
         }
-        if let Some((last, prev_dt)) = self.held.take() {
-            self.emit(last, prev_dt, Vec3::zeros(), 0.0, false);
-        }
+        self.close_last(None);
         self.merge_checked_into_open();
         while let Some(c) = self.checked.pop_front() {
             self.open_group(c);
@@ -158,12 +174,15 @@ impl Sequencer {
     }
 
     /// Hands out the batch built so far. Unless `complete`, its last line may go on: the
-    /// next batch starts with a part of the same group, which the results join.
+    /// next batch starts with a part of the same group, which the results join; the open
+    /// piece (see [`Self::close_last`]) goes on in it.
     pub fn take_batch(&mut self, complete: bool) -> Batch {
         let next = self.spare.take().unwrap_or_default();
         let mut batch = std::mem::replace(&mut self.batch, next);
         if !complete && let Some(open) = batch.moves.last_mut() {
+            let carried = self.open.and_then(|_| batch.pieces.pop());
             open.split = true;
+            open.count -= usize::from(carried.is_some());
             let checks = PathChecks {
                 offset_mm: open.checks.offset_mm,
                 ..PathChecks::default()
@@ -174,9 +193,10 @@ impl Sequencer {
                 checks,
                 end_xy_mm: open.end_xy_mm,
                 first: 0,
-                count: 0,
+                count: usize::from(carried.is_some()),
                 split: true,
             });
+            self.batch.pieces.extend(carried);
         }
         batch
     }
@@ -189,74 +209,65 @@ impl Sequencer {
         self.spare = Some(batch);
     }
 
-    /// Pieces waiting in the batch.
+    /// Pieces waiting in the batch, closed.
     pub fn pending_pieces(&self) -> usize {
-        self.batch.pieces.len()
+        self.batch.pieces.len() - usize::from(self.open.is_some())
     }
 
-    /// The next actual piece: the held one can now be sampled.
+    /// Closes the batch's last piece, now that its successor `next` (the commanded piece
+    /// and what the drive made of it) is known, or that there is none: its end sample
+    /// where the velocity jumps there, and with the rigid model the impulses around it.
     #[inline(always)]
-    fn actual(&mut self, piece: ActualPiece) {
-        let dt = piece.commanded.dt_s;
-        if let Some((held, prev_dt)) = self.held.take() {
-            let rehomed = (held.commanded.end().0 - piece.commanded.p).norm() > CONTINUITY_MM;
-            let (jump, next_dt) = if rehomed {
-                (Vec3::zeros(), 0.0)
-            } else {
-                (piece.jump, dt)
-            };
-            let accel_step = held.commanded.a != piece.commanded.a;
-            let held_dt = held.commanded.dt_s;
-            self.emit(held, prev_dt, jump, next_dt, accel_step && !rehomed);
-            self.held = Some((piece, held_dt));
-        } else {
-            self.held = Some((piece, 0.0));
+    fn close_last(&mut self, next: Option<(&Segment, &DriveStep)>) {
+        let (Some(open), Some(last)) = (self.open.take(), self.batch.pieces.last_mut()) else {
+            return;
+        };
+        let jumps = |j: Vec3| j.norm() > JUMP_MIN_MM_S;
+        let (jump_out, next_dt, accel_step) = match next {
+            Some((c, step)) if step.continuous => (step.jump, c.dt_s, last.commanded.a != c.a),
+            _ => (Vec3::zeros(), 0.0, false),
+        };
+        last.end_sample = jumps(jump_out);
+        if self.response.is_none() {
+            let seg = &last.commanded;
+            last.edge = Edge::Kicks(Kicks::around(
+                seg.t0_s,
+                seg.dt_s,
+                open.jump,
+                open.prev_dt,
+                jump_out,
+                next_dt,
+                self.period_s,
+            ));
+            last.end_sample |= accel_step;
         }
     }
 
-    /// Adds the sampling work of `piece`, whose successor starts with `jump_out` and lasts
-    /// `next_dt`.
+    /// Adds the sampling work of the commanded piece `c`, with what the drive made of it,
+    /// to its line's group; open until its successor comes.
     #[inline(always)]
-    fn emit(
-        &mut self,
-        piece: ActualPiece,
-        prev_dt: f64,
-        jump_out: Vec3,
-        next_dt: f64,
-        accel_step: bool,
-    ) {
-        let seg = piece.commanded;
-        let jumps = |j: Vec3| j.norm() > JUMP_MIN_MM_S;
-        let (kicks, end_sample) = match self.response {
-            Some(_) => (None, jumps(jump_out)),
-            None => (
-                Some(Kicks::around(
-                    seg.t0_s,
-                    seg.dt_s,
-                    piece.jump,
-                    prev_dt,
-                    jump_out,
-                    next_dt,
-                    self.period_s,
-                )),
-                jumps(jump_out) || accel_step,
-            ),
-        };
-        if jumps(piece.jump) {
+    fn add(&mut self, c: Segment, step: &DriveStep) {
+        if step.jump.norm() > JUMP_MIN_MM_S {
             self.corner_until_s = match &self.response {
-                Some(r) => seg.t0_s + 0.5 * r.period_s(),
+                Some(r) => c.t0_s + 0.5 * r.period_s(),
                 None => f64::NEG_INFINITY,
             };
         }
-        let work = PieceWork::new(&piece, kicks, end_sample, self.corner_until_s);
-        let line = seg.line;
+        let line = c.line;
         let starts_group = self.batch.moves.last().is_none_or(|m| m.line != line);
         if starts_group {
             // Every check of the open group's line has come: its pieces have all come.
             self.merge_checked_into_open();
             self.open_line(line);
         }
-        self.batch.pieces.push(work);
+        self.open = Some(Open {
+            jump: step.jump,
+            prev_dt: self.last_dt,
+        });
+        self.last_dt = c.dt_s;
+        self.batch
+            .pieces
+            .push(PieceWork::new(c, step, self.corner_until_s));
         if let Some(m) = self.batch.moves.last_mut() {
             m.count += 1;
         }
@@ -405,6 +416,25 @@ mod tests {
         assert!(arc.count > 5);
         let far = b.moves.iter().find(|m| m.line == 45).unwrap();
         assert!(far.checks.problem.is_some());
+    }
+
+    #[test]
+    fn a_piece_is_the_same_whatever_batch_it_ends() {
+        // The open piece a batch boundary falls after goes on in the next batch, closed
+        // there by its successor: the pieces of small batches, end to end, are those of one
+        // batch (end samples, the rigid model's impulses), sprung and rigid.
+        let (mut machine, gcode) = setup();
+        for rigid in [false, true] {
+            if rigid {
+                machine.drive = Drive::Rigid;
+            }
+            let whole = batches(&machine, &gcode, usize::MAX).remove(0).pieces;
+            let small = batches(&machine, &gcode, 7);
+            assert!(small.len() > 3, "{} batches", small.len());
+            let joined: Vec<PieceWork> = small.into_iter().flat_map(|b| b.pieces).collect();
+            assert_eq!(joined, whole, "rigid {rigid}");
+            assert!(whole.iter().any(|w| w.end_sample), "rigid {rigid}");
+        }
     }
 
     #[test]

@@ -248,17 +248,21 @@ pub struct Ringing {
     pub acc: Vec3,
 }
 
-/// A commanded piece with the drive's lag at its start: the actual motion over the piece.
+/// What the drive makes of a commanded piece ([`DriveStage::push`]): with the piece, the
+/// actual motion over it.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ActualPiece {
-    pub commanded: Segment,
+pub struct DriveStep {
     /// The lag at the start, after the junction's velocity jump.
     pub lag: Lag,
     /// The lag at the end, before the next junction's jump: [`Response::lag_at`] at the
     /// piece's duration (zero with the rigid model).
     pub end: Lag,
-    /// The commanded velocity jump at the start (the junction), mm/s.
+    /// The commanded velocity jump at the start (the junction), mm/s: none after a
+    /// re-homing.
     pub jump: Vec3,
+    /// Whether the piece starts where the previous one ended (not after a re-homing; the
+    /// first piece does).
+    pub continuous: bool,
 }
 
 /// The exp and sin/cos of a duration τ ([`Response::turn`]).
@@ -306,19 +310,19 @@ impl DriveStage {
         }
     }
 
-    /// The next commanded piece with the lag at its start. A piece that does not start
-    /// where the previous ended (a re-homing) starts from rest on the command.
+    /// The lags at the start and end of the next commanded piece. A piece that does not
+    /// start where the previous ended (a re-homing) starts from rest on the command.
     ///
-    /// Inlined into the sequencer: its 224-byte result is then built where it is used.
+    /// Inlined into the sequencer: its result is then built where it is used.
     #[inline(always)]
-    pub fn push(&mut self, seg: &Segment) -> ActualPiece {
-        let jump = match self.prev_end {
-            Some((p, v)) if (seg.p - p).norm() <= CONTINUITY_MM => seg.v - v,
+    pub fn push(&mut self, seg: &Segment) -> DriveStep {
+        let (jump, continuous) = match self.prev_end {
+            Some((p, v)) if (seg.p - p).norm() <= CONTINUITY_MM => (seg.v - v, true),
             Some(_) => {
                 self.lag = Lag::default();
-                Vec3::zeros()
+                (Vec3::zeros(), false)
             }
-            None => seg.v,
+            None => (seg.v, true),
         };
         if self.response.is_some() {
             self.lag.de -= jump;
@@ -333,11 +337,11 @@ impl DriveStage {
             self.lag = r.lag_after(&self.lag, seg.a, slot.1);
         }
         self.prev_end = Some(seg.end());
-        ActualPiece {
-            commanded: *seg,
+        DriveStep {
             lag: start,
             end: self.lag,
             jump,
+            continuous,
         }
     }
 }
@@ -437,14 +441,14 @@ mod tests {
             piece(0.04, 0.06, 1.5, 0.0, 0.0),
         ];
         let mut stage = DriveStage::new(&Drive::Spring(spring));
-        let actual: Vec<ActualPiece> = pieces.iter().map(|s| stage.push(s)).collect();
+        let actual: Vec<DriveStep> = pieces.iter().map(|s| stage.push(s)).collect();
         let r = Response::new(&spring);
         let on_piece = |t: f64| pieces.iter().rposition(|s| s.t0_s <= t).unwrap_or(0);
         let closed = |t: f64| {
-            let a = &actual[on_piece(t)];
-            let tau = t - a.commanded.t0_s;
-            let (pc, vc, _) = a.commanded.at(tau);
-            let lag = r.lag_at(&a.lag, a.commanded.a, tau);
+            let (a, seg) = (&actual[on_piece(t)], &pieces[on_piece(t)]);
+            let tau = t - seg.t0_s;
+            let (pc, vc, _) = seg.at(tau);
+            let lag = r.lag_at(&a.lag, seg.a, tau);
             (pc.x + lag.e.x, vc.x + lag.de.x, r.acceleration(&lag).x)
         };
         let cmd = |t: f64| {

@@ -7,7 +7,7 @@
 use super::{Phase, Sample, SampleSink, StateBox};
 use crate::interval::{Interval, greater};
 use crate::motion::Segment;
-use crate::motion::drive::{ActualPiece, Lag, LagWalk, Response};
+use crate::motion::drive::{DriveStep, Lag, LagWalk, Response};
 use crate::path::Vec3;
 
 /// A velocity jump smaller than this (mm/s) is rounding, not a junction: two collinear
@@ -85,7 +85,7 @@ pub struct PieceWork {
     pub corner_until_s: f64,
 }
 
-/// With a drive response, the lag at a piece's end ([`ActualPiece::end`]); with the rigid
+/// With a drive response, the lag at a piece's end ([`DriveStep::end`]); with the rigid
 /// model, the junctions' impulses around it. One or the other, in the same space: a batch
 /// holds thousands of pieces.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -95,19 +95,16 @@ pub enum Edge {
 }
 
 impl PieceWork {
-    /// The work of `piece`, with the drive's lag at its end (`kicks` None) or the rigid
-    /// model's impulses.
-    pub fn new(
-        piece: &ActualPiece,
-        kicks: Option<Kicks>,
-        end_sample: bool,
-        corner_until_s: f64,
-    ) -> PieceWork {
+    /// The work of the commanded piece `commanded`, with what the drive made of it: the lag
+    /// at its end, no end sample. Its successor may change both (the sequencer's
+    /// `close_last`: the end sample at a jump, the rigid model's impulses).
+    #[inline(always)]
+    pub fn new(commanded: Segment, step: &DriveStep, corner_until_s: f64) -> PieceWork {
         PieceWork {
-            commanded: piece.commanded,
-            lag: piece.lag,
-            edge: kicks.map_or(Edge::End(piece.end), Edge::Kicks),
-            end_sample,
+            commanded,
+            lag: step.lag,
+            edge: Edge::End(step.end),
+            end_sample: false,
             corner_until_s,
         }
     }
