@@ -316,30 +316,35 @@ impl DriveStage {
     /// Inlined into the sequencer: its result is then built where it is used.
     #[inline(always)]
     pub fn push(&mut self, seg: &Segment) -> DriveStep {
+        // The lag in a local, written back once: updated in place, its three components
+        // were stored in parts and loaded again across them, which the processor cannot
+        // forward from its store buffer (a stall of a dozen cycles a piece).
+        let mut lag = self.lag;
         let (jump, continuous) = match self.prev_end {
             Some((p, v)) if (seg.p - p).norm() <= CONTINUITY_MM => (seg.v - v, true),
             Some(_) => {
-                self.lag = Lag::default();
+                lag = Lag::default();
                 (Vec3::zeros(), false)
             }
             None => (seg.v, true),
         };
         if self.response.is_some() {
-            self.lag.de -= jump;
+            lag.de -= jump;
         }
-        let start = self.lag;
+        let start = lag;
         if let Some(r) = &self.response {
             let bits = seg.dt_s.to_bits();
             let slot = &mut self.memo[(bits ^ (bits >> 17) ^ (bits >> 31)) as usize % TURN_MEMO];
             if slot.0 != bits {
                 *slot = (bits, r.turn(seg.dt_s));
             }
-            self.lag = r.lag_after(&self.lag, seg.a, slot.1);
+            lag = r.lag_after(&lag, seg.a, slot.1);
         }
+        self.lag = lag;
         self.prev_end = Some(seg.end());
         DriveStep {
             lag: start,
-            end: self.lag,
+            end: lag,
             jump,
             continuous,
         }
