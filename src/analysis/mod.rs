@@ -106,6 +106,7 @@ pub fn run_edited<R: Read, O: Observer>(
             let mut stage = ModelStage {
                 checker: MoveChecker::new(machine, observer),
                 pending: None,
+                chunks: Vec::new(),
             };
             for batch in batches {
                 stage.process(&batch, &mut on_move);
@@ -279,6 +280,10 @@ struct ModelStage<'m, O: Observer> {
     checker: MoveChecker<'m, O>,
     /// The last result so far: the next batch may continue its line.
     pending: Option<MoveResult<O::PerMove>>,
+    /// Each chunk's results, emptied and kept from one batch to the next: allocated afresh
+    /// for each chunk, their 400-byte results were written to memory the cache did not
+    /// hold (memmove was 8 % of a default run's time, docs/performance.md).
+    chunks: Vec<Vec<MoveResult<O::PerMove>>>,
 }
 
 impl<O: Observer> ModelStage<'_, O> {
@@ -287,24 +292,24 @@ impl<O: Observer> ModelStage<'_, O> {
     fn process(&mut self, batch: &Batch, on_move: &mut impl FnMut(MoveResult<O::PerMove>)) {
         let n = batch.moves.len();
         let checker = &self.checker;
-        let results: Vec<Vec<MoveResult<O::PerMove>>> = (0..n.div_ceil(CHUNK))
-            .into_par_iter()
-            .map(|c| {
-                let run = c * CHUNK..n.min((c + 1) * CHUNK);
-                let mut out = Vec::with_capacity(run.len());
-                SCRATCH.with_borrow_mut(|scratch| {
-                    checker.check_moves(scratch, &batch.pieces, &batch.moves[run], &mut out);
-                });
-                out
-            })
-            .collect();
+        let count = n.div_ceil(CHUNK);
+        if self.chunks.len() < count {
+            self.chunks.resize_with(count, Vec::new);
+        }
+        let results = &mut self.chunks[..count];
+        results.par_iter_mut().enumerate().for_each(|(c, out)| {
+            let run = c * CHUNK..n.min((c + 1) * CHUNK);
+            SCRATCH.with_borrow_mut(|scratch| {
+                checker.check_moves(scratch, &batch.pieces, &batch.moves[run], out);
+            });
+        });
         // A line is split between batches only at their boundary: the batch's first
         // result may continue the pending one, and its last may go on in the next batch.
         // Each result is moved once, into `on_move` (a result is 400 bytes).
         let last = results.iter().rposition(|v| !v.is_empty());
-        for (c, v) in results.into_iter().enumerate() {
+        for (c, v) in results.iter_mut().enumerate() {
             let n = v.len();
-            for (k, r) in v.into_iter().enumerate() {
+            for (k, r) in v.drain(..).enumerate() {
                 match &mut self.pending {
                     Some(p) if p.group == r.group => {
                         p.stats.merge(&r.stats);
