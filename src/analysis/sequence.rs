@@ -175,7 +175,7 @@ impl Sequencer {
 
     /// Hands out the batch built so far. Unless `complete`, its last line may go on: the
     /// next batch starts with a part of the same group, which the results join; the open
-    /// piece (see [`Self::close_last`]) goes on in it.
+    /// piece (its end not known yet) goes on in it.
     pub fn take_batch(&mut self, complete: bool) -> Batch {
         let next = self.spare.take().unwrap_or_default();
         let mut batch = std::mem::replace(&mut self.batch, next);

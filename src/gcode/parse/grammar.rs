@@ -13,15 +13,17 @@
 //! with 1.4 % more instructions and 15 % more branch misses over the whole parse
 //! (cachegrind, the 27.8 MB bunny), `digit0` and a second pass with 9 % and 34 % more.
 //! The search for a line's comment or checksum is memchr's, many bytes at a time (nom's
-//! `take_till` looks at one byte per step: 2.4 % of `check`'s instructions). Everything
-//! else is nom's.
+//! `take_till` looks at one byte per step: 2.4 % of `check`'s instructions). A classic
+//! command's tokens ([`blank_token`], [`value`], [`numeral`]) are read by hand, the
+//! innermost loop of the parser; their nom form is the reference their tests hold them
+//! to (docs/gcode.md). Everything else is nom's.
 
 use nom::{
     IResult, Parser,
     branch::alt,
     bytes::complete::{take_till, take_while, take_while_m_n, take_while1},
     character::complete::{digit1, space0},
-    combinator::{consumed, eof, not, opt, recognize, rest},
+    combinator::{eof, not, opt, recognize, rest},
     sequence::{delimited, preceded, separated_pair, terminated},
 };
 
@@ -178,32 +180,41 @@ pub(super) enum Value<'a> {
     },
 }
 
-/// `blanks token`: whether there were blanks, where the token starts (all of it), the
-/// token. Fails only at the end of the input.
+/// Blanks (spaces and tabs, nom's `space0`): how many start `i`.
 #[inline(always)]
-pub(super) fn blank_token(i: &[u8]) -> Res<'_, (bool, (&[u8], Token<'_>))> {
-    let comment = preceded(
-        byte_eq(b'('),
-        (take_till(|c| c == b')'), opt(byte_eq(b')'))),
-    )
-    .map(|(inside, close)| Token::Comment {
-        inside,
-        closed: close.is_some(),
-    });
-    let unexpected = byte(|_| true).map(Token::Unexpected);
-    let token = alt((word, comment, unexpected));
-    (space0.map(|b: &[u8]| !b.is_empty()), consumed(token)).parse(i)
+fn blanks(i: &[u8]) -> usize {
+    i.iter().take_while(|&&c| is_space(c)).count()
 }
 
-/// `letter [blanks] value`: `X10`, `x -.5`, `X`.
+/// `blanks token`: whether there were blanks, where the token starts (all of it), the
+/// token. Fails only at the end of the input. The token's first byte tells which it is:
+/// a word after a letter, a comment after `(`, else an unexpected byte. By hand, the
+/// innermost loop of the parser: as nom's `alt` of the three, each tried in turn, and
+/// its sequences, the words took two fifths of the parser's instructions (docs/gcode.md).
 #[inline(always)]
-fn word(i: &[u8]) -> Res<'_, Token<'_>> {
-    (byte(is_letter), space0, value)
-        .map(|(letter, _, value)| Token::Word {
-            letter: letter.to_ascii_uppercase(),
-            value,
-        })
-        .parse(i)
+pub(super) fn blank_token(i: &[u8]) -> Res<'_, (bool, (&[u8], Token<'_>))> {
+    let skipped = blanks(i);
+    let at = &i[skipped..];
+    let (rest, token) = match at.split_first() {
+        None => return Err(nom::Err::Error(())),
+        Some((&c, after)) if is_letter(c) => {
+            let (rest, value) = value(&after[blanks(after)..]);
+            let letter = c.to_ascii_uppercase();
+            (rest, Token::Word { letter, value })
+        }
+        Some((b'(', inside)) => {
+            let close = memchr::memchr(b')', inside);
+            let end = close.unwrap_or(inside.len());
+            let comment = Token::Comment {
+                inside: &inside[..end],
+                closed: close.is_some(),
+            };
+            (&inside[(end + 1).min(inside.len())..], comment)
+        }
+        Some((&c, after)) => (after, Token::Unexpected(c)),
+    };
+    let token_text = &at[..at.len() - rest.len()];
+    Ok((rest, (skipped > 0, (token_text, token))))
 }
 
 /// A word's value: a number ending at whitespace, `(`, a letter or the end of the code
@@ -211,21 +222,22 @@ fn word(i: &[u8]) -> Res<'_, Token<'_>> {
 /// (`1.2.3`, `-`, `1:2`), and a number beyond [`MAX_NUMBER`], is bad and skipped up to
 /// whitespace.
 #[inline(always)]
-fn value(i: &[u8]) -> Res<'_, Value<'_>> {
+fn value(i: &[u8]) -> (&[u8], Value<'_>) {
     if !matches!(i.first(), Some(b'0'..=b'9' | b'+' | b'-' | b'.')) {
-        return Ok((i, Value::None));
+        return (i, Value::None);
     }
     let runs_on = |c: u8| !(is_space(c) || c == b'(' || is_letter(c));
-    let kind = match terminated(numeral, not(byte(runs_on))).parse(i) {
-        Ok((rest, n)) if n.has_digits() => match n.value() {
-            Some(v) => return Ok((rest, Value::Number(v))),
+    let (rest, n) = numeral(i);
+    let kind = match rest.first() {
+        Some(&c) if runs_on(c) => DiagKind::MalformedNumber,
+        _ if n.has_digits() => match n.value() {
+            Some(v) => return (rest, Value::Number(v)),
             None => DiagKind::NumberOutOfRange,
         },
         _ => DiagKind::MalformedNumber,
     };
-    take_till(is_space)
-        .map(|text| Value::Bad { text, kind })
-        .parse(i)
+    let text = &i[..i.iter().position(|&c| is_space(c)).unwrap_or(i.len())];
+    (&i[text.len()..], Value::Bad { text, kind })
 }
 
 // ---- Numbers ----
@@ -260,9 +272,9 @@ impl Digits {
     }
 }
 
-/// Digits, valued as they are recognised (one pass).
+/// Digits, valued as they are recognised (one pass); the input after them.
 #[inline(always)]
-fn digits(i: &[u8]) -> Res<'_, Digits> {
+fn digits(i: &[u8]) -> (&[u8], Digits) {
     let mut d = Digits::default();
     for &c in i {
         if !c.is_ascii_digit() {
@@ -270,20 +282,36 @@ fn digits(i: &[u8]) -> Res<'_, Digits> {
         }
         d = d.push(c);
     }
-    Ok((&i[d.count..], d))
+    (&i[d.count..], d)
 }
 
+/// `[+-] digits ["." digits]`, every part optional (then no number: see
+/// [`Numeral::has_digits`]); the input after it. By hand, like [`digits`]: the innermost
+/// token of every word, where nom's `consumed((opt(sign), digits, opt(preceded(".",
+/// digits))))` and `terminated(.., not(..))` cost a fifth of the parser's instructions
+/// (docs/gcode.md).
 #[inline(always)]
-fn numeral(i: &[u8]) -> Res<'_, Numeral<'_>> {
-    let sign = byte(|c| c == b'+' || c == b'-');
-    consumed((opt(sign), digits, opt(preceded(byte_eq(b'.'), digits))))
-        .map(|(text, (sign, int, frac))| Numeral {
-            negative: sign == Some(b'-'),
+fn numeral(i: &[u8]) -> (&[u8], Numeral<'_>) {
+    let (negative, unsigned) = match i.split_first() {
+        Some((b'-', rest)) => (true, rest),
+        Some((b'+', rest)) => (false, rest),
+        _ => (false, i),
+    };
+    let (rest, int) = digits(unsigned);
+    let (rest, frac) = match rest.split_first() {
+        Some((b'.', after)) => digits(after),
+        _ => (rest, Digits::default()),
+    };
+    let text = &i[..i.len() - rest.len()];
+    (
+        rest,
+        Numeral {
+            negative,
             int,
-            frac: frac.unwrap_or_default(),
+            frac,
             text,
-        })
-        .parse(i)
+        },
+    )
 }
 
 /// Powers of ten exactly representable in an f64.
@@ -344,10 +372,8 @@ fn long_number(text: &[u8]) -> Option<f64> {
 /// A number: the input after `[+-] digits ["." digits]`, and its value (`None` without a
 /// digit or beyond [`MAX_NUMBER`]).
 pub(super) fn number(i: &[u8]) -> (&[u8], Option<f64>) {
-    match numeral(i) {
-        Ok((rest, n)) => (rest, n.value()),
-        Err(_) => (i, None), // every part is optional: unreachable
-    }
+    let (rest, n) = numeral(i);
+    (rest, n.value())
 }
 
 // ---- An extended command's arguments ----
@@ -373,4 +399,117 @@ pub(super) fn argument(i: &[u8]) -> Res<'_, Arg<'_>> {
     let unclosed = unclosed.map(|quote| Err((quote, DiagKind::UnclosedQuote)));
     let no_equals = take_while1(bare).map(|at| Err((at, DiagKind::ExpectedKeyValue)));
     preceded(space0, alt((pair, unclosed, no_equals))).parse(i)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nom::combinator::consumed;
+    use proptest::prelude::*;
+
+    /// Digits as a nom parser.
+    fn nom_digits(i: &[u8]) -> Res<'_, Digits> {
+        Ok(digits(i))
+    }
+
+    /// A word's value in nom's combinators, as [`value`] had it before it was written by
+    /// hand.
+    fn nom_value(i: &[u8]) -> Res<'_, Value<'_>> {
+        if !matches!(i, [b'0'..=b'9' | b'+' | b'-' | b'.', ..]) {
+            return Ok((i, Value::None));
+        }
+        let runs_on = |c: u8| !(is_space(c) || c == b'(' || is_letter(c));
+        let sign = byte(|c| c == b'+' || c == b'-');
+        let numeral = consumed((
+            opt(sign),
+            nom_digits,
+            opt(preceded(byte_eq(b'.'), nom_digits)),
+        ))
+        .map(|(text, (sign, int, frac))| Numeral {
+            negative: sign == Some(b'-'),
+            int,
+            frac: frac.unwrap_or_default(),
+            text,
+        });
+        let kind = match terminated(numeral, not(byte(runs_on))).parse(i) {
+            Ok((rest, n)) if n.has_digits() => match n.value() {
+                Some(v) => return Ok((rest, Value::Number(v))),
+                None => DiagKind::NumberOutOfRange,
+            },
+            _ => DiagKind::MalformedNumber,
+        };
+        take_till(is_space)
+            .map(|text| Value::Bad { text, kind })
+            .parse(i)
+    }
+
+    /// The token grammar in nom's combinators, as [`blank_token`] had it before it was
+    /// written by hand: the reference it is held to.
+    fn nom_blank_token(i: &[u8]) -> Res<'_, (bool, (&[u8], Token<'_>))> {
+        let comment = preceded(
+            byte_eq(b'('),
+            (take_till(|c| c == b')'), opt(byte_eq(b')'))),
+        )
+        .map(|(inside, close)| Token::Comment {
+            inside,
+            closed: close.is_some(),
+        });
+        let word = (byte(is_letter), space0, nom_value).map(|(letter, _, value)| Token::Word {
+            letter: letter.to_ascii_uppercase(),
+            value,
+        });
+        let unexpected = byte(|_| true).map(Token::Unexpected);
+        let token = alt((word, comment, unexpected));
+        (space0.map(|b: &[u8]| !b.is_empty()), consumed(token)).parse(i)
+    }
+
+    proptest! {
+        /// Token after token, the hand-written scanner reads any line of G-code's bytes
+        /// (words, signs, points, comments open and closed, tabs, bytes from 0x80 up) as
+        /// nom's combinators do: the same tokens, values, diagnostics and rest.
+        #[test]
+        fn tokens_are_those_of_the_nom_grammar(
+            line in proptest::collection::vec(
+                prop_oneof![
+                    Just(b'G'), Just(b'x'), Just(b'Y'), Just(b'E'), Just(b'e'), Just(b'F'),
+                    Just(b'0'), Just(b'1'), Just(b'9'), Just(b'.'), Just(b'-'), Just(b'+'),
+                    Just(b' '), Just(b'\t'), Just(b'('), Just(b')'), Just(b':'), Just(b'_'),
+                    Just(0xC3u8), any::<u8>(),
+                ],
+                0..40,
+            )
+        ) {
+            let mut rest: &[u8] = &line;
+            loop {
+                let ours = blank_token(rest);
+                let theirs = nom_blank_token(rest);
+                prop_assert_eq!(&ours, &theirs, "at {:?}", String::from_utf8_lossy(rest));
+                let Ok((r, _)) = ours else { break };
+                rest = r;
+            }
+        }
+    }
+
+    /// Long numbers, at the edges of the fast path (15 digits) and of the range.
+    #[test]
+    fn numbers_read_as_the_nom_grammar_reads_them() {
+        for text in [
+            "X123456789012345",
+            "X1234567890123456",
+            "X.000000000000001",
+            "X-1e",
+            "X1000000000",
+            "X1000000001",
+            "X-.5",
+            "X+.",
+            "X.",
+            "X-",
+            "X1.2.3",
+            "X12(c)Y3",
+            "X1 Y",
+        ] {
+            let i = text.as_bytes();
+            assert_eq!(blank_token(i), nom_blank_token(i), "{text}");
+        }
+    }
 }
