@@ -58,12 +58,18 @@ impl StateBox {
     #[inline(always)]
     pub fn join(&self, o: &StateBox) -> StateBox {
         let mut b = *self;
-        for k in 0..3 {
-            b.pos_mm[k] = b.pos_mm[k].join(o.pos_mm[k]);
-            b.vel_mm_s[k] = b.vel_mm_s[k].join(o.vel_mm_s[k]);
-            b.acc_mm_s2[k] = b.acc_mm_s2[k].join(o.acc_mm_s2[k]);
-        }
+        b.join_in_place(o);
         b
+    }
+
+    /// Grows to the smallest box holding both.
+    #[inline(always)]
+    pub fn join_in_place(&mut self, o: &StateBox) {
+        for k in 0..3 {
+            self.pos_mm[k] = self.pos_mm[k].join(o.pos_mm[k]);
+            self.vel_mm_s[k] = self.vel_mm_s[k].join(o.vel_mm_s[k]);
+            self.acc_mm_s2[k] = self.acc_mm_s2[k].join(o.acc_mm_s2[k]);
+        }
     }
 }
 
