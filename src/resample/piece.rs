@@ -452,7 +452,9 @@ impl Grid<'_> {
         };
         RawBox {
             states: StateBox {
-                pos_mm: std::array::from_fn(pos),
+                // Not `array::from_fn`: its closure was called out of line, its captures through
+                // memory.
+                pos_mm: [pos(0), pos(1), pos(2)],
                 vel_mm_s: std::array::from_fn(|i| Interval::hull(va[i], vb[i]).widen(ring.du[i])),
                 acc_mm_s2: acc,
             },
