@@ -186,7 +186,7 @@ fn sequence_edited<R: Read>(
                 for c in step.checked.drain(..) {
                     sequencer.checked(c);
                 }
-                for c in step.commanded.drain(..) {
+                for c in &step.commanded {
                     sequencer.commanded(c);
                     if sequencer.pending_pieces() >= batch_pieces {
                         if let Some(b) = spare() {
@@ -195,6 +195,7 @@ fn sequence_edited<R: Read>(
                         on_batch(sequencer.take_batch(false));
                     }
                 }
+                step.commanded.clear();
                 let _ = give_back.send(step);
             }
             sequencer.finish();

@@ -136,7 +136,7 @@ impl Sequencer {
     }
 
     /// Takes the next piece of the commanded motion.
-    pub fn commanded(&mut self, c: Segment) {
+    pub fn commanded(&mut self, c: &Segment) {
         self.span_s = Some(match self.span_s {
             None => (c.t0_s, c.t1_s()),
             Some((a, _)) => (a, c.t1_s()),
@@ -146,9 +146,9 @@ impl Sequencer {
 
     /// The next commanded piece, through the drive: the last one closed, this one added.
     #[inline(always)]
-    fn piece(&mut self, c: Segment) {
-        let step = self.drive.push(&c);
-        self.close_last(Some((&c, &step)));
+    fn piece(&mut self, c: &Segment) {
+        let step = self.drive.push(c);
+        self.close_last(Some((c, &step)));
         self.add(c, &step);
     }
 
@@ -159,7 +159,7 @@ impl Sequencer {
             let seg = last.commanded;
             let (p, _) = seg.end();
             let settle = Segment::rest(seg.t1_s(), SETTLE_PERIODS * r.period_s(), p, seg.line);
-            self.piece(settle);
+            self.piece(&settle);
         }
         self.close_last(None);
         self.merge_checked_into_open();
@@ -246,7 +246,7 @@ impl Sequencer {
     /// Adds the sampling work of the commanded piece `c`, with what the drive made of it,
     /// to its line's group; open until its successor comes.
     #[inline(always)]
-    fn add(&mut self, c: Segment, step: &DriveStep) {
+    fn add(&mut self, c: &Segment, step: &DriveStep) {
         if step.jump.norm() > JUMP_MIN_MM_S {
             self.corner_until_s = match &self.response {
                 Some(r) => c.t0_s + 0.5 * r.period_s(),
@@ -267,7 +267,7 @@ impl Sequencer {
         self.last_dt = c.dt_s;
         self.batch
             .pieces
-            .push(PieceWork::new(c, step, self.corner_until_s));
+            .push(PieceWork::new(*c, step, self.corner_until_s));
         if let Some(m) = self.batch.moves.last_mut() {
             m.count += 1;
         }
