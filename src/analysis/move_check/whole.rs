@@ -16,10 +16,12 @@ use super::MAX_SAMPLES_PER_PIECE;
 /// of more, first in that of [`Fit::Envelope`] (docs/performance.md).
 const SWING_FIRST_PIECES: usize = 4;
 
-/// Moves whose boxes are joined and offered to one bound first
-/// ([`MoveChecker::let_go_whole`]): on the first 5 MB of the corpus's bunny, groups of 2, 4
-/// and 8 moves take 2.111, 2.093 and 2.108 G instructions (docs/performance.md).
-const WHOLE_GROUP: usize = 4;
+/// The fewest and the most moves whose boxes are joined and offered to one bound first
+/// ([`MoveChecker::let_go_whole`]): a group twice as large after one that went on its
+/// first bound, half as large after one that did not (hot and cool stretches of a print
+/// come in runs). On the first 5 MB of the corpus's bunny, 96.8 k bounds where groups of 4
+/// always took 100.7 k (docs/performance.md).
+const WHOLE_GROUP: (usize, usize) = (1, 8);
 
 /// A move offered whole to the run's peaks: the box of all its samples, how many, the fit
 /// of its accelerations, and whether a bound let it go.
@@ -34,7 +36,7 @@ pub(super) struct WholeMove {
 impl<O: Observer> MoveChecker<'_, O> {
     /// Decides, before any sample, which moves of a call the run's peaks let go whole
     /// (`scratch.whole`, one entry per move): each move's box of all its samples, the
-    /// boxes of [`WHOLE_GROUP`] consecutive offered moves joined and offered to one bound,
+    /// boxes of a few consecutive offered moves ([`WHOLE_GROUP`]) joined and offered to one bound,
     /// a group the bound keeps halved and each half offered again, down to single moves.
     /// Most groups go on one bound, so most moves cost a box and a fraction of a bound.
     pub(super) fn let_go_whole(
@@ -89,8 +91,17 @@ impl<O: Observer> MoveChecker<'_, O> {
             }
             whole.push(w);
         }
-        for group in offered.chunks(WHOLE_GROUP) {
-            self.let_go_group(&mut whole, group, pieces, moves, run);
+        let (fewest, most) = WHOLE_GROUP;
+        let mut size = most;
+        let mut rest = &offered[..];
+        while !rest.is_empty() {
+            let (group, after) = rest.split_at(size.min(rest.len()));
+            size = if self.let_go_group(&mut whole, group, pieces, moves, run) {
+                (2 * size).min(most)
+            } else {
+                (size / 2).max(fewest)
+            };
+            rest = after;
         }
         scratch.whole = whole;
         scratch.offered = offered;
@@ -98,7 +109,8 @@ impl<O: Observer> MoveChecker<'_, O> {
 
     /// Offers the joined boxes of the moves `group` (indices in `whole`) to one bound; if
     /// it keeps them, each half of the group, down to single moves, which get the swing's
-    /// box as a second chance when theirs was the envelope's.
+    /// box as a second chance when theirs was the envelope's. Whether the first bound let
+    /// the whole group go.
     fn let_go_group(
         &self,
         whole: &mut [Option<WholeMove>],
@@ -106,12 +118,12 @@ impl<O: Observer> MoveChecker<'_, O> {
         pieces: &[PieceWork],
         moves: &[MoveWork],
         run: &Floor,
-    ) {
+    ) -> bool {
         // Joined in place, over references: each box is 144 bytes, and copying them
         // through `map` and `reduce` called memmove for each.
         let mut boxes = group.iter().filter_map(|&i| whole[i].as_ref());
         let Some(first) = boxes.next() else {
-            return;
+            return true;
         };
         let mut joined = first.states;
         for w in boxes {
@@ -123,22 +135,23 @@ impl<O: Observer> MoveChecker<'_, O> {
                     w.let_go = true;
                 }
             }
-            return;
+            return true;
         }
         if let [i] = *group {
             let (Some(w), Some(r)) = (&mut whole[i], &self.response) else {
-                return;
+                return false;
             };
             if w.fit == Fit::Envelope {
                 let m = &moves[i];
                 let works = pieces.get(m.first..m.first + m.count).unwrap_or_default();
                 w.let_go = self.below_run(&self.move_states(works, r, Fit::Swing), run);
             }
-            return;
+            return false;
         }
         let (a, b) = group.split_at(group.len() / 2);
         self.let_go_group(whole, a, pieces, moves, run);
         self.let_go_group(whole, b, pieces, moves, run);
+        false
     }
 
     /// A box of all the samples of a move's pieces, to be offered whole: None when some
