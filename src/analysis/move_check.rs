@@ -24,6 +24,13 @@ use whole::WholeMove;
 /// Tolerance on the print radius and the bed, mm: rounding in slicer output.
 const GEOMETRY_TOLERANCE_MM: f64 = 1e-3;
 
+/// Whether a squared distance `d2` is within a relative 1e-9 of `limit2` or past it: the
+/// exact test on the distance itself can only hold then (the squares' rounding is a few
+/// units in the last place).
+fn near_or_past(d2: f64, limit2: f64) -> bool {
+    d2 >= limit2 * (1.0 - 1e-9)
+}
+
 /// A piece longer than this many sampling periods (2.8 h at 1 kHz) is not sampled: only its
 /// ends are checked. Nothing printable lasts that long; a feed rate near zero or a huge
 /// coordinate does, and would otherwise keep the check busy for hours.
@@ -264,23 +271,34 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
     /// The checks on a move's path as a whole: the print disc, the bed, and how close the
     /// arms come to flat (the carriage speed ratio peaks where the path is farthest from a
     /// tower).
+    ///
+    /// Each distance is compared squared first, and its square root, the carriage speed
+    /// ratio's division, taken only near or past its limit: for nearly every move none of
+    /// seven square roots and three divisions (2 % of a default run's instructions).
     pub fn check_geometry(&self, path: &Path, checks: &mut PathChecks) {
         let limit_mm = self.machine.geometry.print_radius_mm;
-        let radius_mm = path.max_xy2_mm2().sqrt();
-        if radius_mm > limit_mm + GEOMETRY_TOLERANCE_MM {
-            checks.flag(Problem::OutsideRadius {
-                radius_mm,
-                limit_mm,
-            });
+        let xy2 = path.max_xy2_mm2();
+        let outside_mm = limit_mm + GEOMETRY_TOLERANCE_MM;
+        if near_or_past(xy2, outside_mm * outside_mm) {
+            let radius_mm = xy2.sqrt();
+            if radius_mm > outside_mm {
+                checks.flag(Problem::OutsideRadius {
+                    radius_mm,
+                    limit_mm,
+                });
+            }
         }
         let z_mm = path.min_z_mm();
         if z_mm < -GEOMETRY_TOLERANCE_MM {
             checks.flag(Problem::BelowBed { z_mm });
         }
         for (tower, xy) in self.model.towers_xy_mm().into_iter().enumerate() {
-            let ratio = self
-                .model
-                .carriage_speed_ratio(tower, path.max_dist2_from_mm2(xy).sqrt());
+            let d2 = path.max_dist2_from_mm2(xy);
+            let near_mm2 = self.model.speed_ratio_dist2_mm2(tower, NEAR_SINGULAR_RATIO);
+            if !near_or_past(d2, near_mm2) {
+                continue;
+            }
+            let ratio = self.model.carriage_speed_ratio(tower, d2.sqrt());
             if ratio > NEAR_SINGULAR_RATIO {
                 checks.near(tower, ratio);
             }
@@ -532,5 +550,75 @@ impl Scratch {
             self.cmd_pos_mm[k][j] = s.cmd_pos_mm[k];
         }
         self.len = j + 1;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::machine::test_support::kossel_machine;
+    use crate::path::Vec3;
+
+    /// The checks of a path the direct way: every distance's square root, every ratio.
+    fn direct(checker: &MoveChecker<()>, path: &Path) -> PathChecks {
+        let mut checks = PathChecks::default();
+        let limit_mm = checker.machine.geometry.print_radius_mm;
+        let radius_mm = path.max_xy2_mm2().sqrt();
+        if radius_mm > limit_mm + GEOMETRY_TOLERANCE_MM {
+            checks.flag(Problem::OutsideRadius {
+                radius_mm,
+                limit_mm,
+            });
+        }
+        for (tower, xy) in checker.model.towers_xy_mm().into_iter().enumerate() {
+            let ratio =
+                (checker.model).carriage_speed_ratio(tower, path.max_dist2_from_mm2(xy).sqrt());
+            if ratio > NEAR_SINGULAR_RATIO {
+                checks.near(tower, ratio);
+            }
+        }
+        checks
+    }
+
+    /// The squared pre-tests flag exactly what the direct tests flag, on paths ending at
+    /// the print radius and at the near-singular distance from each tower, to within a few
+    /// units in the last place on either side.
+    #[test]
+    fn squared_pretests_flag_what_the_direct_tests_do() {
+        let machine = kossel_machine();
+        let checker = MoveChecker::new(&machine, ());
+        let r = machine.geometry.print_radius_mm + GEOMETRY_TOLERANCE_MM;
+        let mut ends = Vec::new();
+        for k in 0..36 {
+            let (s, c) = (k as f64 * 10f64.to_radians()).sin_cos();
+            ends.push(Vec3::new(r * c, r * s, 1.0));
+        }
+        for (tower, xy) in checker.model.towers_xy_mm().into_iter().enumerate() {
+            let h = checker
+                .model
+                .speed_ratio_dist2_mm2(tower, NEAR_SINGULAR_RATIO)
+                .sqrt();
+            // Away from the tower, towards the bed's centre and beyond.
+            let n = (xy[0].powi(2) + xy[1].powi(2)).sqrt();
+            ends.push(Vec3::new(xy[0] * (1.0 - h / n), xy[1] * (1.0 - h / n), 1.0));
+        }
+        let (mut flagged, mut clear) = (0, 0);
+        for end in ends {
+            for ulps in -4i64..=4 {
+                let scale = 1.0 + ulps as f64 * f64::EPSILON;
+                let path = Path::line(Vec3::new(0.0, 0.0, 1.0), end * scale);
+                let mut checks = PathChecks::default();
+                checker.check_geometry(&path, &mut checks);
+                let want = direct(&checker, &path);
+                assert_eq!(checks, want, "{end:?} {ulps}");
+                let any = want.problem.is_some() || want.near_singular.is_some();
+                flagged += usize::from(any);
+                clear += usize::from(!any);
+            }
+        }
+        assert!(
+            flagged > 20 && clear > 20,
+            "{flagged} flagged, {clear} clear"
+        );
     }
 }

@@ -171,6 +171,13 @@ impl DeltaModel {
             f64::INFINITY
         }
     }
+
+    /// The squared horizontal distance from a tower at which [`Self::carriage_speed_ratio`]
+    /// reaches `ratio`: h/√(l² − h²) = r where h² = l²·r²/(1 + r²) (mm²). Nearer, the
+    /// ratio is smaller.
+    pub fn speed_ratio_dist2_mm2(&self, tower: usize, ratio: f64) -> f64 {
+        self.arm2_mm2[tower] * (ratio * ratio / (1.0 + ratio * ratio))
+    }
 }
 
 #[cfg(test)]
