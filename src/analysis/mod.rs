@@ -78,23 +78,20 @@ pub fn run<R: Read, O: Observer>(
     run_edited(input, machine, observer, &mut pass_on, on_move, on_diag)
 }
 
-/// An edit of the interpreter's events on their way to the firmware: takes one event, hands
-/// on (to its second argument) the events the firmware is to see instead.
-pub type EventEdit<'e> = dyn FnMut(Event, &mut dyn FnMut(Event)) + 'e;
-
 /// Hands an event on unchanged: the edit of a plain run.
 fn pass_on(event: Event, to_firmware: &mut dyn FnMut(Event)) {
     to_firmware(event);
 }
 
 /// [`run`], with the interpreter's events going through `edit` on their way to the firmware:
-/// it hands on (to its second argument) the events the firmware is to see instead, e.g.
-/// limit changes added before a move (`tune`).
+/// it takes one event and hands on (to its second argument) the events the firmware is to
+/// see instead, e.g. limit changes added before a move (`tune`). Generic, not a trait
+/// object: a plain run's [`pass_on`] is then inlined.
 pub fn run_edited<R: Read, O: Observer>(
     input: R,
     machine: &Machine,
     observer: O,
-    edit: &mut EventEdit,
+    edit: &mut impl FnMut(Event, &mut dyn FnMut(Event)),
     mut on_move: impl FnMut(MoveResult<O::PerMove>) + Send,
     on_diag: impl FnMut(Diagnostic),
 ) -> io::Result<RunTotals> {
@@ -166,7 +163,7 @@ fn sequence_edited<R: Read>(
     input: R,
     machine: &Machine,
     batch_pieces: usize,
-    edit: &mut EventEdit,
+    edit: &mut impl FnMut(Event, &mut dyn FnMut(Event)),
     mut on_diag: impl FnMut(Diagnostic),
     mut on_batch: impl FnMut(Batch) + Send,
     mut spare: impl FnMut() -> Option<Batch> + Send,
