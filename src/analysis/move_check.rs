@@ -571,8 +571,8 @@ mod tests {
             });
         }
         for (tower, xy) in checker.model.towers_xy_mm().into_iter().enumerate() {
-            let ratio =
-                (checker.model).carriage_speed_ratio(tower, path.max_dist2_from_mm2(xy).sqrt());
+            let d = path.max_dist2_from_mm2(xy).sqrt();
+            let ratio = checker.model.carriage_speed_ratio(tower, d);
             if ratio > NEAR_SINGULAR_RATIO {
                 checks.near(tower, ratio);
             }
