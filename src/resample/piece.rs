@@ -506,8 +506,10 @@ pub fn peak_candidates(
 
 /// Smallest k with k·Ts ≥ t (the grid time is always computed as `k as f64 * period_s`).
 fn first_grid_index(t: f64, period_s: f64) -> i64 {
-    // ⌈t/Ts⌉ without `f64::ceil`, a library call on baseline x86-64.
-    let q = t / period_s;
+    // ⌈t/Ts⌉ without `f64::ceil`, a library call on baseline x86-64; by the reciprocal,
+    // which a caller's loop computes once (the loops below make k exact whatever q's
+    // rounding).
+    let q = t * (1.0 / period_s);
     let mut k = q as i64;
     if (k as f64) < q {
         k += 1;

@@ -378,4 +378,22 @@ proptest::proptest! {
         proptest::prop_assert_eq!(move_samples(&works, TS), summed);
         proptest::prop_assert_eq!(summed, taken as u64);
     }
+
+    /// The first grid index is the smallest k with k·Ts ≥ t, as the grid's times are
+    /// computed (`k as f64 * Ts`), for times anywhere, on grid points and a few units in
+    /// the last place beside them, with periods that are not powers of two.
+    #[test]
+    fn the_first_grid_index_is_the_smallest_at_or_after(
+        k in -1_000_000i64..100_000_000,
+        frac in 0.0..1.0f64,
+        ulps in -3i64..=3,
+        period in proptest::sample::select(vec![0.001, 0.0005, 0.00025, 0.003, 1.0 / 3000.0]),
+    ) {
+        for t in [(k as f64 + frac) * period, k as f64 * period] {
+            let t = t + ulps as f64 * f64::EPSILON * t.abs();
+            let i = first_grid_index(t, period);
+            proptest::prop_assert!(i as f64 * period >= t, "{t} {i}");
+            proptest::prop_assert!(((i - 1) as f64) * period < t, "{t} {i}");
+        }
+    }
 }
