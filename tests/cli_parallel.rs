@@ -1,5 +1,5 @@
 //! The parallel model stage gives exactly what one thread gives: the same report and the
-//! same trace, byte for byte, whatever the number of rayon threads.
+//! same trace, byte for byte, whatever the number of threads (`DELTA_GCODE_THREADS`).
 
 mod common;
 
@@ -8,7 +8,7 @@ use common::*;
 fn run_with_threads(threads: &str, args: &[&str]) -> Vec<u8> {
     let o = bin()
         .args(args)
-        .env("RAYON_NUM_THREADS", threads)
+        .env("DELTA_GCODE_THREADS", threads)
         .output()
         .expect("runs");
     assert!(o.status.code().is_some_and(|c| c < 2), "{}", stderr(&o));

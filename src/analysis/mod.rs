@@ -7,11 +7,10 @@ use std::collections::{BTreeSet, HashMap};
 use std::fs::File;
 use std::io::{self, BufRead, BufReader, Read};
 use std::path::Path;
-use std::sync::mpsc;
+use std::sync::{Mutex, PoisonError, mpsc};
 
 use anyhow::Context;
 use indicatif::ProgressBar;
-use rayon::prelude::*;
 
 use crate::firmware;
 use crate::gcode::{self, Diagnostic, Event, ReadStats};
@@ -19,7 +18,9 @@ use crate::machine::{Firmware, Machine};
 use crate::motion::Segment;
 use crate::path::Vec3;
 use crate::report::{DiagnosticLog, MoveStats, Report};
+use crew::Crew;
 
+mod crew;
 mod move_check;
 mod observe;
 mod sequence;
@@ -36,7 +37,7 @@ const PROGRESS_EVERY_MOVES: u64 = 4096;
 /// Pieces of the actual motion handed to the parallel stage at a time.
 const BATCH: usize = 8192;
 
-/// Consecutive moves checked by one rayon task (their samples share the model's blocks).
+/// Consecutive moves checked as one part of a batch (their samples share the model's blocks).
 const CHUNK: usize = 64;
 
 /// What the model found for one G-code line's motion: the verdict's statistics and what
@@ -64,10 +65,10 @@ const BATCHES_IN_FLIGHT: usize = 2;
 /// (the verdict's statistics and what `observer` kept), `on_diag` every diagnostic of the
 /// reader.
 ///
-/// The reader, interpreter, firmware and drive run on this thread; the sampling, the
-/// model and the observers run on another, fed batches of pieces through a bounded
-/// channel, and spread each batch over the rayon pool. So the sequential stages overlap
-/// the parallel one, and memory stays bounded.
+/// The reader, interpreter and firmware run on this thread, the drive on another; the
+/// sampling, the model and the observers on a third, fed batches of pieces through a
+/// bounded channel, each batch's chunks shared with its helpers ([`THREADS_ENV`]). So the
+/// sequential stages overlap the parallel one, and memory stays bounded.
 pub fn run<R: Read, O: Observer>(
     input: R,
     machine: &Machine,
@@ -98,15 +99,31 @@ pub fn run_edited<R: Read, O: Observer>(
     let (to_model, batches) = mpsc::sync_channel::<Batch>(BATCHES_IN_FLIGHT);
     // The batches done with go back to be filled again.
     let (give_back, spares) = mpsc::channel::<Batch>();
+    let checker = MoveChecker::new(machine, observer);
+    let crew = Crew::new();
+    let work = |job: &Job<O::PerMove>, c: usize| {
+        let n = job.batch.moves.len();
+        let run = c * CHUNK..n.min((c + 1) * CHUNK);
+        let mut out = job.outs[c].lock().unwrap_or_else(PoisonError::into_inner);
+        SCRATCH.with_borrow_mut(|scratch| {
+            checker.check_moves(scratch, &job.batch.pieces, &job.batch.moves[run], &mut out);
+        });
+    };
     std::thread::scope(|scope| {
+        for _ in 1..model_threads() {
+            scope.spawn(|| crew.help(&work));
+        }
+        let (checker, crew, work) = (&checker, &crew, &work);
         let model = scope.spawn(move || {
+            // The helpers go when the stage ends, even by a panic.
+            let _dismiss = Dismiss(crew);
             let mut stage = ModelStage {
-                checker: MoveChecker::new(machine, observer),
+                checker,
                 pending: None,
-                chunks: Vec::new(),
+                outs: Vec::new(),
             };
             for batch in batches {
-                stage.process(&batch, &mut on_move);
+                let batch = stage.process(crew, work, batch, &mut on_move);
                 let _ = give_back.send(batch);
             }
             if let Some(last) = stage.pending.take() {
@@ -268,44 +285,79 @@ pub fn for_firmware(firmware: &Firmware, d: &Diagnostic) -> bool {
 }
 
 thread_local! {
-    /// Each rayon worker's sample blocks (27 KB), kept from one chunk to the next: made
-    /// afresh for each of rayon's splits they cost 1.4 % of a run in memset.
+    /// Each model thread's sample blocks (27 KB), kept from one chunk to the next: made
+    /// afresh for each chunk they cost 1.4 % of a run in memset.
     static SCRATCH: RefCell<Box<Scratch>> = RefCell::new(Box::default());
 }
 
 /// The parallel stage.
-struct ModelStage<'m, O: Observer> {
-    checker: MoveChecker<'m, O>,
+struct ModelStage<'c, 'm, O: Observer> {
+    checker: &'c MoveChecker<'m, O>,
     /// The last result so far: the next batch may continue its line.
     pending: Option<MoveResult<O::PerMove>>,
     /// Each chunk's results, emptied and kept from one batch to the next: allocated afresh
     /// for each chunk, their 400-byte results were written to memory the cache did not
     /// hold (memmove was 8 % of a default run's time, docs/performance.md).
-    chunks: Vec<Vec<MoveResult<O::PerMove>>>,
+    outs: Vec<Mutex<Vec<MoveResult<O::PerMove>>>>,
 }
 
-impl<O: Observer> ModelStage<'_, O> {
-    /// Samples a batch's moves over the rayon pool, chunks of moves per task, and hands on
-    /// their results in order, the parts of a line split between batches joined.
-    fn process(&mut self, batch: &Batch, on_move: &mut impl FnMut(MoveResult<O::PerMove>)) {
-        let n = batch.moves.len();
-        let checker = &self.checker;
-        let count = n.div_ceil(CHUNK);
-        if self.chunks.len() < count {
-            self.chunks.resize_with(count, Vec::new);
+/// A batch in the model stage's crew, with each chunk's results.
+struct Job<P> {
+    batch: Batch,
+    outs: Vec<Mutex<Vec<MoveResult<P>>>>,
+}
+
+/// Dismisses the crew when dropped.
+struct Dismiss<'a, J: Sync>(&'a Crew<J>);
+
+impl<J: Sync> Drop for Dismiss<'_, J> {
+    fn drop(&mut self) {
+        self.0.dismiss();
+    }
+}
+
+/// The environment variable that sets how many threads sample the moves (the model
+/// stage's own and its helpers): a positive number; unset or anything else, one per core.
+pub const THREADS_ENV: &str = "DELTA_GCODE_THREADS";
+
+/// The threads of the model stage ([`THREADS_ENV`]).
+fn model_threads() -> usize {
+    std::env::var(THREADS_ENV)
+        .ok()
+        .and_then(|v| v.trim().parse::<usize>().ok())
+        .filter(|&n| n > 0)
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+}
+
+impl<O: Observer> ModelStage<'_, '_, O> {
+    /// Samples a batch's moves over the crew, a chunk of moves at a time, and hands on
+    /// their results in order, the parts of a line split between batches joined; gives
+    /// the batch back.
+    fn process(
+        &mut self,
+        crew: &Crew<Job<O::PerMove>>,
+        work: &impl Fn(&Job<O::PerMove>, usize),
+        batch: Batch,
+        on_move: &mut impl FnMut(MoveResult<O::PerMove>),
+    ) -> Batch {
+        let count = batch.moves.len().div_ceil(CHUNK);
+        let mut outs = std::mem::take(&mut self.outs);
+        if outs.len() < count {
+            outs.resize_with(count, Mutex::default);
         }
-        let results = &mut self.chunks[..count];
-        results.par_iter_mut().enumerate().for_each(|(c, out)| {
-            let run = c * CHUNK..n.min((c + 1) * CHUNK);
-            SCRATCH.with_borrow_mut(|scratch| {
-                checker.check_moves(scratch, &batch.pieces, &batch.moves[run], out);
-            });
-        });
+        let Job { batch, mut outs } = crew.run(Job { batch, outs }, count, work);
+        let results = &mut outs[..count];
+        let checker = self.checker;
         // A line is split between batches only at their boundary: the batch's first
         // result may continue the pending one, and its last may go on in the next batch.
         // Each result is moved once, into `on_move` (a result is 400 bytes).
-        let last = results.iter().rposition(|v| !v.is_empty());
+        let last = results.iter_mut().rposition(|v| {
+            !v.get_mut()
+                .unwrap_or_else(PoisonError::into_inner)
+                .is_empty()
+        });
         for (c, v) in results.iter_mut().enumerate() {
+            let v = v.get_mut().unwrap_or_else(PoisonError::into_inner);
             let n = v.len();
             for (k, r) in v.drain(..).enumerate() {
                 match &mut self.pending {
@@ -328,6 +380,8 @@ impl<O: Observer> ModelStage<'_, O> {
                 }
             }
         }
+        self.outs = outs;
+        batch
     }
 }
 

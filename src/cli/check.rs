@@ -121,9 +121,8 @@ pub fn run(args: &Args) -> anyhow::Result<ExitCode> {
 
 /// Runs `check` over the files on a few threads of their own, results in argument order.
 ///
-/// Not on the rayon pool: each file's pipeline blocks on its channel and its model thread,
-/// which itself needs the rayon pool; files on the pool could take every worker and wait
-/// forever.
+/// Each file's pipeline has threads of its own besides (`analysis::run`); most of its
+/// time is spent in them.
 fn for_each_file_in_parallel<F: Sync>(
     files: &[F],
     check: impl Fn(&F) -> anyhow::Result<Report> + Sync,
