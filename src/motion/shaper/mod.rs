@@ -344,6 +344,64 @@ mod tests {
         }
     }
 
+    /// Late in a print (t ≈ 9000 s, where an ulp is 2e-12 s) a move's pieces end where
+    /// their durations' sum says and the next move starts where its own duration says, an
+    /// ulp or so apart (here two), and commanded breaks of two pulses fall as far apart
+    /// (here at every move: each piece lasts the two pulses' spacing). The slivers between them are
+    /// commanded pieces too, and none may jump: the planned velocity never does here, so
+    /// neither may the commanded one.
+    #[test]
+    fn slivers_between_moves_do_not_jump() {
+        let zv = AxisShaper {
+            kind: ShaperType::Zv,
+            freq_hz: 40.0,
+            damping_ratio: 0.1,
+        };
+        let shaper = InputShaper {
+            x: Some(zv),
+            y: Some(zv),
+        };
+        let (lo, hi) = Pulses::of(Some(zv)).span_s();
+        let dt = hi - lo;
+        let dir = Vec3::new(0.6, 0.8, 0.0);
+        let mut s = Shaper::new(&shaper);
+        let mut out = Vec::new();
+        // From rest to 50 mm/s, moves of three pieces (up by 1000 mm/s², cruise, down),
+        // to rest: the velocity never jumps.
+        let (up, cruise) = (50.0 / dt, 50.0 + 1000.0 * dt);
+        let mut moves = vec![vec![(0.0, up)]];
+        moves.extend((0..400).map(|_| vec![(50.0, 1000.0), (cruise, 0.0), (cruise, -1000.0)]));
+        moves.push(vec![(50.0, -up)]);
+        let (mut move_t0, mut p) = (9000.0, Vec3::zeros());
+        for (line, pieces) in moves.iter().enumerate() {
+            let mut t = move_t0;
+            for &(v0, a) in pieces {
+                let seg = Segment {
+                    t0_s: t,
+                    dt_s: dt,
+                    p,
+                    v: dir * v0,
+                    a: dir * a,
+                    line: line as u64,
+                    phase: Phase::Cruise,
+                };
+                s.push(seg, &mut |c| out.push(c));
+                p = seg.end().0;
+                t += dt;
+            }
+            // The next move two ulps after this one's last piece.
+            move_t0 = f64::from_bits(t.to_bits() + 2);
+        }
+        s.finish(&mut |c| out.push(c));
+        let slivers = out.iter().filter(|c| c.dt_s < 1e-9).count();
+        assert!(slivers > 50, "{slivers} slivers of {}", out.len());
+        for w in out.windows(2) {
+            let (p_end, v_end) = w[0].end();
+            assert!((p_end - w[1].p).norm() < 1e-9, "{:?} {:?}", w[0], w[1]);
+            assert!((v_end - w[1].v).norm() < 1e-6, "{:?} {:?}", w[0], w[1]);
+        }
+    }
+
     #[test]
     fn no_shaper_hands_on_the_planned_pieces() {
         let chain = planned_chain();

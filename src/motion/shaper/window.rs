@@ -31,8 +31,6 @@ pub struct Window {
     head: usize,
     /// Per offset: the first piece that started after the last `next_start` question.
     starts: [usize; MAX_OFFSETS],
-    /// Per offset: the first piece that ended after the last `in_force` question.
-    ends: [usize; MAX_OFFSETS],
 }
 
 impl Window {
@@ -77,7 +75,7 @@ impl Window {
             if self.head >= COMPACT_MIN && self.head >= self.len() {
                 self.pieces.drain(..self.head);
                 self.times.drain(..self.head);
-                for c in self.starts.iter_mut().chain(&mut self.ends) {
+                for c in &mut self.starts {
                     *c = c.saturating_sub(self.head);
                 }
                 self.head = 0;
@@ -91,7 +89,6 @@ impl Window {
         self.times.clear();
         self.head = 0;
         self.starts = [0; MAX_OFFSETS];
-        self.ends = [0; MAX_OFFSETS];
     }
 
     /// The index of the first piece starting after `t`, asked for offset `k` with `t`
@@ -106,12 +103,21 @@ impl Window {
         i
     }
 
-    /// The index of the piece in force at `t` (None before the first or after the last),
-    /// asked for offset `k` as for [`Self::in_force`].
+    /// The index of the piece in force at `t` for offset `k`: the last one started by then,
+    /// None before the first or after the last has ended. Between two pieces it is the
+    /// earlier one: inside the window pieces touch, but a move's pieces end where their
+    /// durations' sum says, and the next move starts where its own duration says, an ulp
+    /// or so apart, and the earlier piece holds there to within rounding (a rest there
+    /// instead, from the window's end, made a spurious jump of the commanded motion).
+    ///
+    /// No search: `k`'s [`Self::next_start`] cursor must have been asked last for a time
+    /// at or before `t` with no piece starting in between, as the shaper asks it right after
+    /// its breaks (`Shaper::next_break`), whose cursors move only there.
     #[inline(always)]
-    pub fn planned_at(&mut self, k: usize, t: f64) -> Option<usize> {
-        let i = self.in_force(k, t);
-        self.times.get(i).filter(|s| s[0] <= t).map(|_| i)
+    pub fn planned_at(&self, k: usize, t: f64) -> Option<usize> {
+        let i = self.starts[k].max(self.head).checked_sub(1)?;
+        let ends = self.times.get(i)?[1];
+        (i >= self.head && (ends > t || i + 1 < self.times.len())).then_some(i)
     }
 
     /// Position, velocity and acceleration at `t` on piece `i` (extended as a polynomial),
@@ -129,18 +135,6 @@ impl Window {
                 }
             }
         }
-    }
-
-    /// The index of the first piece ending after `t` (the piece in force at `t` if it has
-    /// started), asked for offset `k` with `t` never decreasing, as for `next_start`.
-    #[inline(always)]
-    pub fn in_force(&mut self, k: usize, t: f64) -> usize {
-        let mut i = self.ends[k].max(self.head);
-        while self.times.get(i).is_some_and(|s| s[1] <= t) {
-            i += 1;
-        }
-        self.ends[k] = i;
-        i
     }
 }
 
@@ -161,12 +155,16 @@ mod tests {
         }
     }
 
-    /// Every answer of the cursors is the bisection's, over pushes, drops and a clear.
+    /// Every answer of the cursors is the bisection's, over pushes (each batch after a gap
+    /// in time), drops and a clear: the first piece starting after a time, and the piece in
+    /// force at that time and at a later one before the next start (in a gap, the piece
+    /// before it).
     #[test]
     fn cursors_answer_as_a_bisection_does() {
         let mut w = Window::default();
         let mut t0 = 0.0;
         let push = |w: &mut Window, t0: &mut f64, n: usize| {
+            *t0 += 0.0023;
             for i in 0..n {
                 let dt = 0.001 * (1 + (i * 7) % 5) as f64;
                 w.push(piece(*t0, dt));
@@ -175,10 +173,15 @@ mod tests {
         };
         push(&mut w, &mut t0, 40);
         let bisect_start = |w: &Window, t: f64| w.head + w.live().partition_point(|s| s.t0_s <= t);
-        let bisect_end = |w: &Window, t: f64| w.head + w.live().partition_point(|s| s.t1_s() <= t);
+        let bisect_in_force = |w: &Window, t: f64| {
+            let i = (w.head + w.live().partition_point(|s| s.t0_s <= t)).checked_sub(1)?;
+            let last = i + 1 == w.pieces.len();
+            (i >= w.head && !(last && w.pieces[i].t1_s() <= t)).then_some(i)
+        };
         let offsets = [0.0, -0.004, 0.0031, 0.012];
         let mut t = -0.01;
         let (mut checked, mut compactions, mut dropped) = (0, 0, 0);
+        let (mut in_force, mut gaps) = (0, 0);
         while t < t0 + 0.02 {
             for (k, tau) in offsets.iter().enumerate() {
                 assert_eq!(
@@ -186,7 +189,18 @@ mod tests {
                     bisect_start(&w, t + tau),
                     "{t} {tau}"
                 );
-                assert_eq!(w.in_force(k, t + tau), bisect_end(&w, t + tau), "{t} {tau}");
+                let i = w.next_start(k, t + tau);
+                let next = w.get(i).map_or(t0 + 1.0, |s| s.t0_s);
+                for at in [t + tau, 0.5 * (t + tau + next)] {
+                    assert_eq!(
+                        w.planned_at(k, at),
+                        bisect_in_force(&w, at),
+                        "{t} {tau} {at}"
+                    );
+                    let before = w.planned_at(k, at).and_then(|i| w.get(i));
+                    in_force += usize::from(before.is_some());
+                    gaps += usize::from(before.is_some_and(|s| s.t1_s() <= at));
+                }
                 checked += 1;
             }
             if w.front().is_some_and(|s| s.t1_s() < t - 0.005) {
@@ -204,6 +218,10 @@ mod tests {
         }
         assert!(dropped > 3 * COMPACT_MIN, "{dropped}");
         assert!(compactions > 2, "{compactions}");
+        assert!(
+            in_force > 1000 && gaps > 10,
+            "{in_force} in force, {gaps} in gaps"
+        );
         w.clear();
         push(&mut w, &mut t0, 3);
         assert_eq!(w.len(), 3);
