@@ -35,17 +35,19 @@ impl<J: Sync> Crew<J> {
     }
 
     /// Does the parts `0..parts` of `job`, `work(&job, part)` once each, on this thread
-    /// and the helpers ([`Self::help`]) that are free, and gives the job back when every
-    /// part is done.
-    pub fn run(&self, job: J, parts: usize, work: &impl Fn(&J, usize)) -> J {
+    /// and, if `help`, the helpers ([`Self::help`]) that are free, and gives the job back
+    /// when every part is done.
+    pub fn run(&self, job: J, parts: usize, help: bool, work: &impl Fn(&J, usize)) -> J {
         {
             let mut slot = self.job.write().unwrap_or_else(PoisonError::into_inner);
             *slot = Some(job);
             self.next.store(0, Ordering::Relaxed);
             self.parts.store(parts, Ordering::Relaxed);
         }
-        self.bell.lock().unwrap_or_else(PoisonError::into_inner).0 += 1;
-        self.rung.notify_all();
+        if help {
+            self.bell.lock().unwrap_or_else(PoisonError::into_inner).0 += 1;
+            self.rung.notify_all();
+        }
         self.claim(work);
         let mut slot = self.job.write().unwrap_or_else(PoisonError::into_inner);
         slot.take()
@@ -98,15 +100,17 @@ mod tests {
     use std::sync::atomic::AtomicBool;
     use std::time::{Duration, Instant};
 
-    /// A job: a count per part, and whether a helper did a part.
+    /// A job: a count per part, whether a helper did a part, and whether one is called.
     struct Tally {
         done: Vec<AtomicUsize>,
         helped: AtomicBool,
         runner: std::thread::ThreadId,
+        help: bool,
     }
 
-    /// Every part of every job is done once, the helpers do some of them (the first part
-    /// of each job waits for one), each job comes back, and the helpers go when dismissed.
+    /// Every part of every job is done once, the helpers do some of them when called (the
+    /// first part of each such job waits for one) and none otherwise, each job comes back,
+    /// and the helpers go when dismissed.
     #[test]
     fn each_part_is_done_once_and_the_helpers_help() {
         let crew = Crew::<Tally>::new();
@@ -115,7 +119,7 @@ mod tests {
             if !mine {
                 job.helped.store(true, Ordering::SeqCst);
             }
-            if part == 0 && mine && job.done.len() > 1 {
+            if part == 0 && mine && job.help && job.done.len() > 1 {
                 let start = Instant::now();
                 while !job.helped.load(Ordering::SeqCst)
                     && start.elapsed() < Duration::from_secs(10)
@@ -129,17 +133,18 @@ mod tests {
             for _ in 0..3 {
                 scope.spawn(|| crew.help(&work));
             }
-            for parts in [0, 1, 7, 64, 500] {
+            for (parts, help) in [(0, true), (1, true), (7, true), (64, false), (500, true)] {
                 let job = Tally {
                     done: (0..parts).map(|_| AtomicUsize::new(0)).collect(),
                     helped: AtomicBool::new(false),
                     runner: std::thread::current().id(),
+                    help,
                 };
-                let job = crew.run(job, parts, &work);
+                let job = crew.run(job, parts, help, &work);
                 for (i, d) in job.done.iter().enumerate() {
                     assert_eq!(d.load(Ordering::SeqCst), 1, "part {i} of {parts}");
                 }
-                assert_eq!(job.helped.into_inner(), parts > 1, "{parts} parts");
+                assert_eq!(job.helped.into_inner(), help && parts > 1, "{parts} parts");
             }
             crew.dismiss();
         });

@@ -37,6 +37,13 @@ const PROGRESS_EVERY_MOVES: u64 = 4096;
 /// Pieces of the actual motion handed to the parallel stage at a time.
 const BATCH: usize = 8192;
 
+/// A batch of fewer chunks than this is checked by the model stage's own thread alone.
+/// Marlin's batches hold a few hundred moves of ~40 pieces (1–5 chunks; Klipper's 11–14 with
+/// an input shaper, 44–49 without): the model stage's work is then well below the firmware
+/// thread's, which bounds the run, and a helper woken for each batch took that thread's
+/// core (the bunny with the Q5 profile: 4.12 → 3.68 s, docs/performance.md).
+const HELP_MIN_CHUNKS: usize = 8;
+
 /// Consecutive moves checked as one part of a batch (their samples share the model's blocks).
 const CHUNK: usize = 64;
 
@@ -345,7 +352,8 @@ impl<O: Observer> ModelStage<'_, '_, O> {
         if outs.len() < count {
             outs.resize_with(count, Mutex::default);
         }
-        let Job { batch, mut outs } = crew.run(Job { batch, outs }, count, work);
+        let help = count >= HELP_MIN_CHUNKS;
+        let Job { batch, mut outs } = crew.run(Job { batch, outs }, count, help, work);
         let results = &mut outs[..count];
         let checker = self.checker;
         // A line is split between batches only at their boundary: the batch's first
