@@ -191,34 +191,23 @@ impl Shaper {
     /// The commanded piece over [ta, tb), inside which no pulse crosses a planned break
     /// (`ta` never smaller than at the last call).
     #[inline(always)]
-    fn piece(&mut self, ta: f64, tb: f64) -> Segment {
+    fn piece(&self, ta: f64, tb: f64) -> Segment {
         let mid = 0.5 * (ta + tb);
-        let planned = &mut self.planned;
+        let planned = &self.planned;
         let own = planned.planned_at(0, mid);
-        let (p0, v0, a0) = planned.state(own, ta);
-        let (mut p, mut v, mut a) = (p0, v0, a0);
-        // Both axes in one pass over the pulses when they have the same shaper (the same
-        // sums, in the same order, as one axis at a time).
-        let same = self.same;
-        for (axis, pulses) in self.axes.iter().enumerate() {
-            if !self.shaped[axis] || (same && axis == 1) {
-                continue;
+        let (mut p, mut v, mut a) = planned.state(own, ta);
+        if self.same {
+            // Both axes in one pass over the pulses (the same sums, in the same order, as one
+            // axis at a time).
+            if self.shaped[0] {
+                let [ps, vs, as_] = self.pulse_sum(0, ta, mid);
+                (p.x, p.y, v.x, v.y, a.x, a.y) = (ps[0], ps[1], vs[0], vs[1], as_[0], as_[1]);
             }
-            let (mut pk, mut vk, mut ak) = ([0.0; 2], [0.0; 2], [0.0; 2]);
-            for (i, (w, tau)) in pulses.iter().enumerate() {
-                let s = planned.planned_at(self.slots[axis][i], mid + tau);
-                let (ps, vs, as_) = planned.state(s, ta + tau);
-                for k in 0..2 {
-                    pk[k] += w * ps[k];
-                    vk[k] += w * vs[k];
-                    ak[k] += w * as_[k];
-                }
-            }
-            for k in 0..2 {
-                if k == axis || same {
-                    p[k] = pk[k];
-                    v[k] = vk[k];
-                    a[k] = ak[k];
+        } else {
+            for axis in 0..2 {
+                if self.shaped[axis] {
+                    let [ps, vs, as_] = self.pulse_sum(axis, ta, mid);
+                    (p[axis], v[axis], a[axis]) = (ps[axis], vs[axis], as_[axis]);
                 }
             }
         }
@@ -238,6 +227,24 @@ impl Shaper {
             line,
             phase,
         }
+    }
+
+    /// Σ a_i · planned(ta + τ_i) over `axis`'s pulses, in X and Y: position, velocity and
+    /// acceleration at the start of the commanded piece over [ta, tb) (`mid` its middle,
+    /// where each pulse's planned piece is looked up).
+    #[inline(always)]
+    fn pulse_sum(&self, axis: usize, ta: f64, mid: f64) -> [[f64; 2]; 3] {
+        let mut sum = [[0.0; 2]; 3];
+        for (i, (w, tau)) in self.axes[axis].iter().enumerate() {
+            let s = self.planned.planned_at(self.slots[axis][i], mid + tau);
+            let (ps, vs, as_) = self.planned.state(s, ta + tau);
+            for k in 0..2 {
+                sum[0][k] += w * ps[k];
+                sum[1][k] += w * vs[k];
+                sum[2][k] += w * as_[k];
+            }
+        }
+        sum
     }
 
     /// Drops the planned pieces no pulse will look at again.
