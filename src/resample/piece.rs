@@ -224,10 +224,55 @@ pub fn piece_samples(work: &PieceWork, period_s: f64) -> u64 {
     samples_within(work, first_inside(t0, period_s), period_s).0
 }
 
-/// [`piece_samples`] of consecutive pieces, summed: where a piece starts exactly where the
-/// one before it ends, its first grid point inside comes from that end's grid index
-/// instead of a second division (a box of a whole move is offered with its count).
+/// [`piece_samples`] of consecutive pieces, summed (a box of a whole move is offered with
+/// its count).
+///
+/// A chain of pieces each starting where the one before it ends, each of positive length,
+/// has one start sample a piece, its end samples, and the grid points strictly inside the
+/// chain but for those on which a piece starts (they are that piece's start): two grid
+/// indices for the chain instead of one a piece. Whether a start lies on a grid point is
+/// asked exactly only when its time is within 1e-6 of a period's multiple (the grid's time
+/// `k as f64 * Ts` is within a few units in the last place of k·Ts); other chains go
+/// piece by piece.
 pub fn move_samples(works: &[PieceWork], period_s: f64) -> u64 {
+    let (Some(first), Some(last)) = (works.first(), works.last()) else {
+        return 0;
+    };
+    let inv = 1.0 / period_s;
+    let mut chain = true;
+    let mut ends = 0;
+    let mut on_grid = 0;
+    let mut prev_end = first.commanded.t0_s;
+    for w in works {
+        let (t0, t1) = (w.commanded.t0_s, w.commanded.t1_s());
+        // Without a branch per piece: the fallback is rare.
+        chain &= (t0 == prev_end) & (t1 > t0);
+        ends += u64::from(w.end_sample);
+        let q = t0 * inv;
+        let frac = (q - (q as i64) as f64).abs();
+        let near = !(frac > GRID_NEAR && frac < 1.0 - GRID_NEAR && q.abs() < GRID_NEAR_MAX);
+        if near && !std::ptr::eq(w, first) {
+            on_grid += u64::from(first_grid_index(t0, period_s) as f64 * period_s == t0);
+        }
+        prev_end = t1;
+    }
+    if !chain {
+        return piece_by_piece(works, period_s);
+    }
+    let inside = first_grid_index(last.commanded.t1_s(), period_s)
+        - first_inside(first.commanded.t0_s, period_s);
+    works.len() as u64 + ends + inside.max(0) as u64 - on_grid
+}
+
+/// How close t/Ts must come to an integer for [`move_samples`] to ask whether t is on the
+/// grid, and the largest t/Ts below which that is enough (above, always asked): at most
+/// ~1e-12 off for k below 1e9.
+const GRID_NEAR: f64 = 1e-6;
+const GRID_NEAR_MAX: f64 = 1e9;
+
+/// [`move_samples`] a piece at a time: where a piece starts exactly where the one before it
+/// ends, its first grid point inside comes from that end's grid index.
+fn piece_by_piece(works: &[PieceWork], period_s: f64) -> u64 {
     let mut count = 0;
     let mut end: Option<(f64, i64)> = None;
     for w in works {

@@ -353,22 +353,29 @@ fn the_peak_candidates_are_samples() {
 proptest::proptest! {
     /// A chain's count is its pieces' counts summed, whether each piece starts where the
     /// one before it ends (then the end's grid index is reused), on a grid point, or
-    /// elsewhere (a re-homing); and it is the samples `sample_piece` takes.
+    /// elsewhere (a re-homing); and it is the samples `sample_piece` takes. Contiguous
+    /// pieces ending on a grid point (or a unit in the last place beside it), early in a
+    /// print and hours into it, try the count of a whole chain.
     #[test]
     fn a_chains_count_is_its_pieces_counts(
-        pieces in proptest::collection::vec((0.0..0.004f64, 0u8..4, proptest::bool::ANY), 1..12),
-        start in 0.0..0.01f64,
+        pieces in proptest::collection::vec((0.0..0.004f64, 0u8..6, proptest::bool::ANY), 1..12),
+        start in proptest::prop_oneof![0.0..0.01f64, 1e3..3e4f64],
     ) {
         let mut t = start;
         let mut works = Vec::new();
         for (dt, kind, end_sample) in pieces {
-            // 0: contiguous; 1: starts on the next grid point; 2: a gap; 3: zero length.
+            // 0: contiguous; 1: starts on the next grid point; 2: a gap; 3: zero length;
+            // 4 and 5: contiguous, ending on the next grid point or the one after.
             match kind {
                 1 => t = (t / TS).ceil() * TS,
                 2 => t += 0.0027,
                 _ => {}
             }
-            let dt = if kind == 3 { 0.0 } else { dt };
+            let dt = match kind {
+                3 => 0.0,
+                4 | 5 => ((t / TS).floor() + f64::from(kind - 3)) * TS - t,
+                _ => dt,
+            };
             let s = seg(t, dt, Vec3::zeros(), Vec3::zeros(), Vec3::zeros());
             works.push(work(s, Kicks::default(), end_sample));
             t = s.t1_s();
