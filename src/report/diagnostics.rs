@@ -20,6 +20,9 @@ pub const KIND_LINES: usize = 5;
 /// in the last one (a file of random text could make a kind per line).
 const MAX_KINDS: usize = 1000;
 
+/// The message of the kind that counts the diagnostics of the kinds past [`MAX_KINDS`].
+const OTHER_KINDS: &str = "diagnostics of other kinds";
+
 /// The diagnostics of one kind.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct DiagnosticKind {
@@ -42,6 +45,11 @@ pub struct DiagnosticKind {
 pub struct DiagnosticKinds {
     kinds: Vec<DiagnosticKind>,
     index: HashMap<(bool, String), usize>,
+    /// The kind the last diagnostic was counted in, unless that was the kinds beyond
+    /// [`MAX_KINDS`]: a diagnostic with the same severity and message is of that kind, and
+    /// a file's diagnostics come in runs of one message (a Marlin file's `M204 P…` on every
+    /// other line), so most find their kind without their key made and hashed.
+    last: Option<usize>,
 }
 
 /// The severity's name in reports.
@@ -72,27 +80,48 @@ fn kind_key(message: &str) -> String {
 
 impl DiagnosticKinds {
     pub fn add(&mut self, d: &Diagnostic) {
-        let (key, message) = if self.kinds.len() < MAX_KINDS {
-            (kind_key(&d.message), &*d.message)
-        } else {
-            (String::new(), "diagnostics of other kinds")
+        let i = match self.last {
+            Some(i)
+                if self.kinds[i].severity == d.severity && self.kinds[i].message == d.message =>
+            {
+                i
+            }
+            _ => self.kind_of(d),
         };
-        let k = self.kind(DiagnosticKind {
-            severity: d.severity,
-            message: message.to_string(),
-            count: 0,
-            lines: Vec::new(),
-            column: d.column,
-            key,
-        });
+        let k = &mut self.kinds[i];
         k.count += 1;
         if k.lines.len() < KIND_LINES && k.lines.last() != Some(&d.line) {
             k.lines.push(d.line);
         }
     }
 
-    /// The kind of `new`, added (as it is) if it is not there yet.
-    fn kind(&mut self, new: DiagnosticKind) -> &mut DiagnosticKind {
+    /// The index of the kind of `d`, added if it is new: past [`MAX_KINDS`] kinds, a new
+    /// kind's diagnostics are counted in one for all the others.
+    fn kind_of(&mut self, d: &Diagnostic) -> usize {
+        let key = (d.severity == Severity::Error, kind_key(&d.message));
+        if let Some(&i) = self.index.get(&key) {
+            self.last = Some(i);
+            return i;
+        }
+        let mut kind = DiagnosticKind {
+            severity: d.severity,
+            message: d.message.clone(),
+            count: 0,
+            lines: Vec::new(),
+            column: d.column,
+            key: key.1,
+        };
+        if self.kinds.len() >= MAX_KINDS {
+            kind.message = OTHER_KINDS.to_string();
+            kind.key = String::new();
+        } else {
+            self.last = Some(self.kinds.len());
+        }
+        self.kind(kind)
+    }
+
+    /// The index of the kind of `new`, added (as it is) if it is not there yet.
+    fn kind(&mut self, new: DiagnosticKind) -> usize {
         let next = self.kinds.len();
         let i = *self
             .index
@@ -101,18 +130,19 @@ impl DiagnosticKinds {
         if i == next {
             self.kinds.push(new);
         }
-        &mut self.kinds[i]
+        i
     }
 
     /// Takes in the kinds of other diagnostics of the same file.
     pub fn merge(&mut self, other: DiagnosticKinds) {
         for theirs in other.kinds {
             let (count, lines) = (theirs.count, theirs.lines.clone());
-            let k = self.kind(DiagnosticKind {
+            let i = self.kind(DiagnosticKind {
                 count: 0,
                 lines: Vec::new(),
                 ..theirs
             });
+            let k = &mut self.kinds[i];
             k.count += count;
             k.lines.extend(lines);
             k.lines.sort_unstable();
@@ -124,6 +154,7 @@ impl DiagnosticKinds {
         self.index = (self.kinds.iter().enumerate())
             .map(|(i, k)| ((k.severity == Severity::Error, k.key.clone()), i))
             .collect();
+        self.last = None;
     }
 
     /// The kinds, in the order their first diagnostics stand in the file.
@@ -239,8 +270,55 @@ mod tests {
                 &format!("unsupported shaper type `{}`", name(i)),
             ));
         }
-        assert!(k.as_slice().len() <= MAX_KINDS + 1);
-        let total: u64 = k.as_slice().iter().map(|k| k.count).sum();
-        assert_eq!(total, MAX_KINDS as u64 + 50);
+        assert_eq!(k.as_slice().len(), MAX_KINDS + 1);
+        let other = &k.as_slice()[MAX_KINDS];
+        assert_eq!((other.message.as_str(), other.count), (OTHER_KINDS, 50));
+        // A kind told apart before the cap is still counted in its own, whether its message
+        // comes again as it was or with other numbers, after the others' kind or not.
+        let first = "unsupported shaper type `a`";
+        k.add(&warn(2000, first));
+        k.add(&warn(2001, first));
+        k.add(&warn(2002, "unsupported shaper type `b`"));
+        k.add(&warn(
+            2003,
+            "unsupported shaper type `zzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzz`",
+        ));
+        let kinds = k.as_slice();
+        assert_eq!((kinds[0].count, kinds[1].count), (3, 2));
+        assert_eq!(kinds[MAX_KINDS].count, 51);
+        let total: u64 = kinds.iter().map(|k| k.count).sum();
+        assert_eq!(total, MAX_KINDS as u64 + 54);
+    }
+
+    /// A message that comes again counts in its kind, however the messages before it ran.
+    #[test]
+    fn a_repeated_message_finds_its_kind() {
+        let mut k = DiagnosticKinds::default();
+        for (line, message) in [
+            (1, "a 1"),
+            (2, "a 1"),
+            (3, "b"),
+            (4, "a 1"),
+            (5, "a 2"),
+            (6, "a 1"),
+        ] {
+            k.add(&warn(line, message));
+        }
+        k.add(&Diagnostic {
+            severity: Severity::Error,
+            ..warn(7, "a 1")
+        });
+        k.add(&warn(8, "a 1"));
+        let kinds = k.as_slice();
+        let counts: Vec<_> = kinds.iter().map(|k| (k.severity, k.count)).collect();
+        assert_eq!(
+            counts,
+            [
+                (Severity::Warning, 6),
+                (Severity::Warning, 1),
+                (Severity::Error, 1)
+            ]
+        );
+        assert_eq!(kinds[0].lines, [1, 2, 4, 5, 6]);
     }
 }
