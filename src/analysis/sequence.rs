@@ -277,6 +277,7 @@ impl Sequencer {
     /// its first) go into it: when the group closes (a piece of another line comes, the motion
     /// ends), since a move's checks come before its pieces. (A group split between batches
     /// gets them in its last part; the results join the parts.)
+    #[inline(always)]
     fn merge_checked_into_open(&mut self) {
         let Some(open) = self.batch.moves.last_mut() else {
             return;
@@ -297,11 +298,16 @@ impl Sequencer {
                 self.open_group(c);
             }
         }
-        let mut open = Checked {
+        // Its first planned move's checks as they are (most lines have one planned move).
+        let first = match self.checked.front() {
+            Some(c) if c.line == line => self.checked.pop_front(),
+            _ => None,
+        };
+        let mut open = first.unwrap_or_else(|| Checked {
             line,
             checks: PathChecks::default(),
             end_xy_mm: self.batch.moves.last().map_or([0.0; 2], |m| m.end_xy_mm),
-        };
+        });
         while self.checked.front().is_some_and(|c| c.line == line) {
             if let Some(c) = self.checked.pop_front() {
                 open.checks.merge(&c.checks);
