@@ -204,9 +204,7 @@ fn sequence_edited<R: Read>(
         let drive = scope.spawn(move || {
             let mut sequencer = Sequencer::new(machine);
             for mut step in steps {
-                for c in step.checked.drain(..) {
-                    sequencer.checked(c);
-                }
+                sequencer.checked(&mut step.checked);
                 for c in &step.commanded {
                     sequencer.commanded(c);
                     if sequencer.pending_pieces() >= batch_pieces {

@@ -129,10 +129,10 @@ impl Sequencer {
         }
     }
 
-    /// Takes the checks of a move of the G-code (before its pieces come, and in the order of
-    /// the moves).
-    pub fn checked(&mut self, c: Checked) {
-        self.checked.push_back(c);
+    /// Takes the checks of moves of the G-code (before their pieces come, and in the order
+    /// of the moves), leaving `checks` empty.
+    pub fn checked(&mut self, checks: &mut Vec<Checked>) {
+        self.checked.extend(checks.drain(..));
     }
 
     /// Takes the next piece of the commanded motion.
