@@ -392,8 +392,11 @@ impl RunFloor {
         {
             return;
         }
+        // Positive numbers order as their bits. The atomic maximum (a locked exchange loop)
+        // only where the floor is below: it only rises, so a floor read at or above `v`
+        // stays so.
         let raise = |a: &AtomicU64, v: f64| {
-            if v > 0.0 {
+            if v > 0.0 && v.to_bits() > a.load(Ordering::Relaxed) {
                 a.fetch_max(v.to_bits(), Ordering::Relaxed);
             }
         };
