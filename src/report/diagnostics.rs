@@ -45,8 +45,8 @@ pub struct DiagnosticKind {
 pub struct DiagnosticKinds {
     kinds: Vec<DiagnosticKind>,
     index: HashMap<(bool, String), usize>,
-    /// The kind the last diagnostic was counted in, unless that was the kinds beyond
-    /// [`MAX_KINDS`]: a diagnostic with the same severity and message is of that kind, and
+    /// A kind whose message is the last diagnostic's (never the kinds beyond
+    /// [`MAX_KINDS`]): a diagnostic with the same severity and message is of that kind, and
     /// a file's diagnostics come in runs of one message (a Marlin file's `M204 P…` on every
     /// other line), so most find their kind without their key made and hashed.
     last: Option<usize>,
@@ -100,7 +100,10 @@ impl DiagnosticKinds {
     fn kind_of(&mut self, d: &Diagnostic) -> usize {
         let key = (d.severity == Severity::Error, kind_key(&d.message));
         if let Some(&i) = self.index.get(&key) {
-            self.last = Some(i);
+            // Remembered only where the kind's message is this one: not the others' kind.
+            if self.kinds[i].message == d.message {
+                self.last = Some(i);
+            }
             return i;
         }
         let mut kind = DiagnosticKind {
