@@ -7,11 +7,11 @@ use std::collections::VecDeque;
 
 use crate::gcode::Move;
 use crate::machine::Machine;
-use crate::motion::Segment;
 use crate::motion::drive::{Drive, DriveStage, DriveStep, Response};
+use crate::motion::{JUMP_MIN_MM_S, Segment};
 use crate::path::Vec3;
 use crate::report::{MoveStats, PathChecks};
-use crate::resample::{Edge, JUMP_MIN_MM_S, Kicks, PieceWork};
+use crate::resample::{Edge, Kicks, PieceWork};
 
 use super::Observer;
 use super::move_check::MoveChecker;
@@ -64,7 +64,7 @@ pub struct Sequencer {
     /// The batch's last piece is open: the next piece tells its end (the end sample, the
     /// rigid model's impulses), see [`Self::close_last`].
     open: Option<Open>,
-    /// The duration of the last piece, s.
+    /// The duration of the last piece's last part (its last phase), s.
     last_dt: f64,
     corner_until_s: f64,
     /// Lines whose planned moves were checked but whose pieces have not come yet.
@@ -223,16 +223,17 @@ impl Sequencer {
             return;
         };
         let jumps = |j: Vec3| j.norm() > JUMP_MIN_MM_S;
-        let (jump_out, next_dt, accel_step) = match next {
-            Some((c, step)) if step.continuous => (step.jump, c.dt_s, last.commanded.a != c.a),
-            _ => (Vec3::zeros(), 0.0, false),
+        let (jump_out, next) = match next {
+            Some((c, step)) if step.continuous => (step.jump, Some(c)),
+            _ => (Vec3::zeros(), None),
         };
         last.end_sample = jumps(jump_out);
         if self.response.is_none() {
+            let next_dt = next.map_or(0.0, Segment::first_part_s);
+            let accel_step = next.is_some_and(|c| last.commanded.a != c.a);
             let seg = &last.commanded;
             last.edge = Edge::Kicks(Kicks::around(
-                seg.t0_s,
-                seg.dt_s,
+                seg,
                 open.jump,
                 open.prev_dt,
                 jump_out,
@@ -264,7 +265,7 @@ impl Sequencer {
             jump: step.jump,
             prev_dt: self.last_dt,
         });
-        self.last_dt = c.dt_s;
+        self.last_dt = c.last_part_s();
         self.batch
             .pieces
             .push(PieceWork::new(*c, step, self.corner_until_s));

@@ -354,7 +354,7 @@ impl DriveStage {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::motion::Phase;
+    use crate::motion::{Phase, PhaseChanges};
 
     /// ẍ = ω²(x_c − x) + 2ζω(ẋ_c − ẋ) integrated numerically: classic RK4 on (x, ẋ) from
     /// rest at x = 0, with the commanded motion a function of time. Calls `on(t, x, ẋ, ẍ)`
@@ -401,6 +401,7 @@ mod tests {
             a: x(a),
             line: 1,
             phase: Phase::Cruise,
+            changes: PhaseChanges::NONE,
         }
     }
 

@@ -66,7 +66,29 @@ pub struct Segment {
     pub a: Vec3,
     /// The G-code line of the planned move this piece belongs to.
     pub line: u64,
+    /// The phase at t0; later ones where the piece spans its line's planned phases.
     pub phase: Phase,
+    pub changes: PhaseChanges,
+}
+
+/// Where a piece passes into its line's next planned phases: the shaper's commanded pieces
+/// run on through a planned break of the same line that neither the shaped X and Y nor the
+/// unshaped axes break at ([`shaper`]). From `at_s[i]` on the phase is `then[i]`; unused
+/// entries are at +∞.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PhaseChanges {
+    pub at_s: [f64; MAX_PHASE_CHANGES],
+    pub then: [Phase; MAX_PHASE_CHANGES],
+}
+
+/// The most phase changes a piece holds: a planned move's accel, cruise and decel.
+pub const MAX_PHASE_CHANGES: usize = 2;
+
+impl PhaseChanges {
+    pub const NONE: PhaseChanges = PhaseChanges {
+        at_s: [f64::INFINITY; MAX_PHASE_CHANGES],
+        then: [Phase::Rest; MAX_PHASE_CHANGES],
+    };
 }
 
 impl Segment {
@@ -80,6 +102,24 @@ impl Segment {
             a: Vec3::zeros(),
             line,
             phase: Phase::Rest,
+            changes: PhaseChanges::NONE,
+        }
+    }
+
+    /// How long the piece stays in its phase at the start, s: its duration but for phase
+    /// changes ([`PhaseChanges`]).
+    pub fn first_part_s(&self) -> f64 {
+        match self.changes.at_s[0] {
+            c if c.is_finite() => c - self.t0_s,
+            _ => self.dt_s,
+        }
+    }
+
+    /// How long the piece is in its last phase, s ([`Self::first_part_s`] from the end).
+    pub fn last_part_s(&self) -> f64 {
+        match self.changes.at_s {
+            [_, c] | [c, _] if c.is_finite() => self.t1_s() - c,
+            _ => self.dt_s,
         }
     }
 
@@ -108,3 +148,7 @@ impl Segment {
 /// Position jumps smaller than this between consecutive pieces are rounding, mm; larger
 /// ones are a re-homing (G28), where the motion starts afresh.
 pub const CONTINUITY_MM: f64 = 1e-6;
+
+/// A velocity jump smaller than this (mm/s) is rounding, not a junction: two collinear
+/// moves' directions differ by ~1e-16.
+pub const JUMP_MIN_MM_S: f64 = 1e-9;

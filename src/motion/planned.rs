@@ -1,7 +1,7 @@
 //! The planned motion as pieces: each planned move's trapezoid, a piece per phase, along
 //! its straight line; a rest wherever the toolhead waits (an extrude-only move, a dwell).
 
-use super::{Phase, Segment};
+use super::{Phase, PhaseChanges, Segment};
 use crate::firmware::klipper::planner::PlannedMove;
 use crate::path::Vec3;
 
@@ -51,6 +51,7 @@ impl PlannedPieces {
                     a: dir * acc,
                     line: mv.line,
                     phase,
+                    changes: PhaseChanges::NONE,
                 });
                 s += v0 * dt + 0.5 * acc * dt * dt;
                 t += dt;

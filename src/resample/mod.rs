@@ -9,8 +9,8 @@ mod piece;
 pub use crate::motion::Phase;
 pub use curve::{Curve, Frame, Lissajous, TaylorStep, taylor_step, walk_constant_speed};
 pub use piece::{
-    Edge, Fit, JUMP_MIN_MM_S, Kicks, PieceWork, RawBox, SPARSE_MIN_SAMPLES, move_samples,
-    peak_candidates, piece_raw, piece_samples, piece_states, sample_piece,
+    Edge, Fit, Kicks, PieceWork, RawBox, SPARSE_MIN_SAMPLES, move_samples, peak_candidates,
+    piece_raw, piece_samples, piece_states, sample_piece,
 };
 
 use crate::interval::Interval;

@@ -6,13 +6,9 @@
 
 use super::{Phase, Sample, SampleSink, StateBox};
 use crate::interval::{Interval, greater};
-use crate::motion::Segment;
 use crate::motion::drive::{DriveStep, Lag, LagWalk, Response};
+use crate::motion::{MAX_PHASE_CHANGES, PhaseChanges, Segment};
 use crate::path::Vec3;
-
-/// A velocity jump smaller than this (mm/s) is rounding, not a junction: two collinear
-/// moves' directions differ by ~1e-16.
-pub const JUMP_MIN_MM_S: f64 = 1e-9;
 
 /// The rigid model's junction impulses around one piece: each junction's velocity jump
 /// spread evenly over a box from half a piece before it to half a piece after it, each half
@@ -30,11 +26,11 @@ pub struct Kicks {
 }
 
 impl Kicks {
-    /// The impulses of a piece from `t0` lasting `dt`, with the jumps at its start and end
-    /// and its neighbours' durations.
+    /// The impulses of `seg`, with the jumps at its start and end and its neighbours'
+    /// durations (of their parts next to it, [`Segment::first_part_s`] and
+    /// [`Segment::last_part_s`], as of `seg`'s own).
     pub fn around(
-        t0_s: f64,
-        dt_s: f64,
+        seg: &Segment,
         jump_in: Vec3,
         prev_dt_s: f64,
         jump_out: Vec3,
@@ -42,7 +38,7 @@ impl Kicks {
         period_s: f64,
     ) -> Kicks {
         let half = |d: f64| 0.5 * d.max(0.0).min(period_s);
-        let own = half(dt_s);
+        let (first, last) = (half(seg.first_part_s()), half(seg.last_part_s()));
         let density = |dv: Vec3, width: f64| {
             if width > 0.0 {
                 dv / width
@@ -51,10 +47,10 @@ impl Kicks {
             }
         };
         Kicks {
-            start: density(jump_in, half(prev_dt_s) + own),
-            end: density(jump_out, own + half(next_dt_s)),
-            calm_from_s: t0_s + own,
-            calm_to_s: t0_s + dt_s - own,
+            start: density(jump_in, half(prev_dt_s) + first),
+            end: density(jump_out, last + half(next_dt_s)),
+            calm_from_s: seg.t0_s + first,
+            calm_to_s: seg.t0_s + seg.dt_s - last,
         }
     }
 
@@ -116,6 +112,41 @@ impl PieceWork {
             Edge::End(_) => Kicks::default(),
         }
     }
+
+    /// Calls `f` with each part of the piece between its phase changes
+    /// ([`Segment::changes`]) as a piece of its own: the pieces the shaper made before its
+    /// pieces ran on through a line's phases, sampled as they were (a part's start is a
+    /// sample). With a drive, each part's lag from the piece's start (`response`).
+    fn parts(&self, response: Option<&Response>, mut f: impl FnMut(&PieceWork)) {
+        let seg = &self.commanded;
+        let c = &seg.changes;
+        let mut part = *self;
+        part.commanded.changes = PhaseChanges::NONE;
+        part.end_sample = false;
+        for i in 0..=MAX_PHASE_CHANGES {
+            let next = c.at_s.get(i).copied().unwrap_or(f64::INFINITY);
+            if next.is_finite() {
+                let tau = next - seg.t0_s;
+                part.commanded.dt_s = next - part.commanded.t0_s;
+                let lag = response.map(|r| r.lag_at(&self.lag, seg.a, tau));
+                if let Some(lag) = lag {
+                    part.edge = Edge::End(lag);
+                }
+                f(&part);
+                let (p, v, _) = seg.at(tau);
+                part.commanded.t0_s = next;
+                (part.commanded.p, part.commanded.v) = (p, v);
+                part.commanded.phase = c.then[i];
+                part.lag = lag.unwrap_or(self.lag);
+            } else {
+                part.commanded.dt_s = seg.t1_s() - part.commanded.t0_s;
+                part.edge = self.edge;
+                part.end_sample = self.end_sample;
+                f(&part);
+                return;
+            }
+        }
+    }
 }
 
 /// Samples of `work` (see the module doc) on the grid of `period_s`, which must be positive
@@ -129,6 +160,43 @@ pub fn sample_piece(
     if !(period_s > 0.0 && period_s.is_finite()) {
         return;
     }
+    if let Some(r) = response
+        && out.whole_pieces()
+    {
+        let count = piece_samples(work, period_s);
+        if count >= SPARSE_MIN_SAMPLES
+            && out.skip(&piece_states(work, r, period_s, Fit::Swing), count)
+        {
+            return;
+        }
+    }
+    if work.commanded.changes.at_s[0].is_finite() {
+        sample_parts(work, response, period_s, out);
+    } else {
+        sample_part(work, response, period_s, out);
+    }
+}
+
+/// [`sample_piece`] of a piece with phase changes, part by part ([`PieceWork::parts`]):
+/// out of line, the common piece's loop stays as it was.
+#[inline(never)]
+fn sample_parts(
+    work: &PieceWork,
+    response: Option<&Response>,
+    period_s: f64,
+    out: &mut impl SampleSink,
+) {
+    work.parts(response, |part| sample_part(part, response, period_s, out));
+}
+
+/// [`sample_piece`] of a piece without phase changes, not offered whole.
+#[inline(always)]
+fn sample_part(
+    work: &PieceWork,
+    response: Option<&Response>,
+    period_s: f64,
+    out: &mut impl SampleSink,
+) {
     let seg = &work.commanded;
     let (t0, t1) = (seg.t0_s, seg.t1_s());
     // With a drive, the phase from the corner's end; without, from the impulses.
@@ -168,16 +236,6 @@ pub fn sample_piece(
             cmd_pos_mm: p,
         }
     };
-    if let Some(r) = response
-        && out.whole_pieces()
-    {
-        let count = piece_samples(work, period_s);
-        if count >= SPARSE_MIN_SAMPLES
-            && out.skip(&piece_states(work, r, period_s, Fit::Swing), count)
-        {
-            return;
-        }
-    }
     out.sample(state(t0, false));
     let mut k = first_inside(t0, period_s);
     match response {
@@ -217,8 +275,8 @@ pub fn sample_piece(
     }
 }
 
-/// How many samples [`sample_piece`] takes of `work`: its start, the grid points inside,
-/// its end when asked.
+/// How many samples [`sample_piece`] takes of `work`: its start, its phase changes, the grid
+/// points inside, its end when asked.
 pub fn piece_samples(work: &PieceWork, period_s: f64) -> u64 {
     let t0 = work.commanded.t0_s;
     samples_within(work, first_inside(t0, period_s), period_s).0
@@ -228,7 +286,7 @@ pub fn piece_samples(work: &PieceWork, period_s: f64) -> u64 {
 /// its count).
 ///
 /// A chain of pieces each starting where the one before it ends, each of positive length,
-/// has one start sample a piece, its end samples, and the grid points strictly inside the
+/// has one start sample a piece, its phase changes' and end samples, and the grid points strictly inside the
 /// chain but for those on which a piece starts (they are that piece's start): two grid
 /// indices for the chain instead of one a piece. Whether a start lies on a grid point is
 /// asked exactly only when its time is within 1e-6 of a period's multiple (the grid's time
@@ -247,7 +305,7 @@ pub fn move_samples(works: &[PieceWork], period_s: f64) -> u64 {
         let (t0, t1) = (w.commanded.t0_s, w.commanded.t1_s());
         // Without a branch per piece: the fallback is rare.
         chain &= (t0 == prev_end) & (t1 > t0);
-        ends += u64::from(w.end_sample);
+        ends += u64::from(w.end_sample) + change_samples(&w.commanded, period_s);
         let q = t0 * inv;
         let frac = (q - (q as i64) as f64).abs();
         let near = !(frac > GRID_NEAR && frac < 1.0 - GRID_NEAR && q.abs() < GRID_NEAR_MAX);
@@ -296,7 +354,20 @@ fn samples_within(work: &PieceWork, first: i64, period_s: f64) -> (u64, i64) {
     let (t0, t1) = (seg.t0_s, seg.t1_s());
     let end = first_grid_index(t1, period_s);
     let inside = (end - first).max(0) as u64;
-    (1 + inside + u64::from(work.end_sample && t1 > t0), end)
+    let n = 1 + change_samples(seg, period_s) + inside + u64::from(work.end_sample && t1 > t0);
+    (n, end)
+}
+
+/// The samples at a piece's phase changes: each is a part's start ([`PieceWork::parts`]),
+/// but for one on a grid point, which is among the grid points inside.
+#[inline(always)]
+fn change_samples(seg: &Segment, period_s: f64) -> u64 {
+    // Most pieces have none (every piece without a shaper): one test for them.
+    if !seg.changes.at_s[0].is_finite() {
+        return 0;
+    }
+    let off_grid = |&c: &f64| c.is_finite() && first_grid_index(c, period_s) as f64 * period_s != c;
+    seg.changes.at_s.iter().filter(|c| off_grid(c)).count() as u64
 }
 
 /// How closely a box of a whole piece fits its actual accelerations.

@@ -9,7 +9,7 @@
 
 use super::trapezoid::Ramp;
 use crate::delta::DeltaModel;
-use crate::motion::Segment;
+use crate::motion::{PhaseChanges, Segment};
 use crate::path::Vec3;
 
 /// Largest allowed distance, in carriage height, between a chord's carriages and the
@@ -75,6 +75,7 @@ pub fn emit(
                     a: dir * r.accel,
                     line,
                     phase: r.phase,
+                    changes: PhaseChanges::NONE,
                 });
             }
             tau = end;

@@ -13,9 +13,12 @@ pub use pulses::{
     AxisShaper, DEFAULT_SHAPER_DAMPING_RATIO, InputShaper, Pulses, ShaperChange, ShaperType,
 };
 
-use super::{CONTINUITY_MM, Segment};
+use super::{CONTINUITY_MM, JUMP_MIN_MM_S, MAX_PHASE_CHANGES, Phase, PhaseChanges, Segment};
 use crate::interval::lesser;
 use window::Window;
+
+/// A commanded piece no longer than this is left out, s: two breaks a rounding apart.
+const MIN_PIECE_S: f64 = 1e-12;
 
 /// The commanded motion of a planned one, as a stream: planned pieces in, commanded pieces
 /// out as soon as no later planned piece can change them. The motion before the first and
@@ -122,7 +125,11 @@ impl Shaper {
             self.fresh = false;
         }
         let known_s = seg.t1_s();
-        self.planned.push(seg);
+        let runs_on = self
+            .planned
+            .back()
+            .is_some_and(|last| self.runs_on(last, &seg));
+        self.planned.push(seg, runs_on);
         // A slot without a later planned start saw the end of the last piece, or nothing.
         self.breaks = [f64::NEG_INFINITY; window::MAX_OFFSETS];
         self.emit_until(known_s - self.tau_hi, out);
@@ -151,7 +158,7 @@ impl Shaper {
         while self.t_out < t_end {
             let ta = self.t_out;
             let tb = self.next_break(ta).min(t_end);
-            if tb - ta > 1e-12 {
+            if tb - ta > MIN_PIECE_S {
                 out(self.piece(ta, tb));
             }
             self.t_out = tb;
@@ -161,31 +168,58 @@ impl Shaper {
 
     /// The first break of the commanded motion after `t` (never smaller than at the last
     /// call): a planned break b seen by a pulse of offset τ is at b − τ; the planned breaks
-    /// themselves (offset 0) split the pieces by planned move too.
+    /// themselves (offset 0) break the unshaped axes, and name the line and its phase.
     ///
-    /// A slot's break is found again only once `t` has passed it (or a piece came): the
+    /// A pulse's break is found again only once `t` has passed it (or a piece came): the
     /// first planned start after t + τ is still the one found for an earlier t as long as
     /// it lies beyond t + τ, since the starts before it lay before the earlier t + τ.
+    ///
+    /// A planned start of the same line that the unshaped axes run on through
+    /// ([`Self::runs_on`]) is no break: the piece runs on, and names the starts it passes
+    /// ([`PhaseChanges`], at most [`MAX_PHASE_CHANGES`]; their samples are taken as
+    /// before).
     #[inline(always)]
     fn next_break(&mut self, t: f64) -> f64 {
         let mut best = f64::INFINITY;
-        for slot in 0..self.break_slots {
+        for slot in 1..self.break_slots {
             let tau = self.offsets[slot];
             // Breaks of the planned motion after t + τ: the pieces' starts and the end.
             let want = t + tau + 1e-12;
             if self.breaks[slot] <= want {
                 let i = self.planned.next_start(slot, want);
-                self.breaks[slot] = match self.planned.get(i) {
-                    Some(s) => s.t0_s,
-                    None => (self.planned.back().map(Segment::t1_s))
-                        .filter(|&b| b > want)
-                        .unwrap_or(f64::INFINITY),
-                };
+                self.breaks[slot] = self.planned.start_or_end(i, want);
             }
             // Never NaN (a time, or ±∞ less a finite offset): a plain comparison.
             best = lesser(best, self.breaks[slot] - tau);
         }
+        // The planned motion's own starts before the pulses' first break: asked each time,
+        // as the starts passed count from `t`.
+        let want = t + 1e-12;
+        let i = self.planned.next_start(0, want);
+        for n in 0..=MAX_PHASE_CHANGES {
+            let b = self.planned.start_or_end(i + n, want);
+            if b >= best || n == MAX_PHASE_CHANGES || self.planned.runs_on(i + n) != Some(true) {
+                return lesser(best, b);
+            }
+        }
         best
+    }
+
+    /// Whether the axes the shaper leaves as planned (Z, and X or Y if unshaped) run on
+    /// from `last` into `next`, the planned piece after it, of the same line: same
+    /// acceleration, no jump. Then the commanded motion does not break there.
+    fn runs_on(&self, last: &Segment, next: &Segment) -> bool {
+        let moving = |s: &Segment| matches!(s.phase, Phase::Accel | Phase::Cruise | Phase::Decel);
+        let (p, v) = last.end();
+        let unshaped = [!self.shaped[0], !self.shaped[1], true];
+        last.line == next.line
+            && moving(last)
+            && moving(next)
+            && (0..3).filter(|&k| unshaped[k]).all(|k| {
+                last.a[k] == next.a[k]
+                    && (v[k] - next.v[k]).abs() <= JUMP_MIN_MM_S
+                    && (p[k] - next.p[k]).abs() <= CONTINUITY_MM
+            })
     }
 
     /// The commanded piece over [ta, tb), inside which no pulse crosses a planned break
@@ -194,6 +228,7 @@ impl Shaper {
     fn piece(&self, ta: f64, tb: f64) -> Segment {
         let mid = 0.5 * (ta + tb);
         let planned = &self.planned;
+        // The planned piece in force at `ta`: slot 0's cursor was last asked there.
         let own = planned.planned_at(0, mid);
         let (mut p, mut v, mut a) = planned.state(own, ta);
         if self.same {
@@ -211,11 +246,11 @@ impl Shaper {
                 }
             }
         }
-        let (line, phase) = match own.and_then(|i| self.planned.get(i)) {
-            Some(s) => (s.line, s.phase),
+        let (line, phase, changes) = match own.and_then(|i| Some((i, planned.get(i)?))) {
+            Some((i, s)) => (s.line, s.phase, planned.changes(i, tb)),
             None => {
-                let s = self.planned.front().or(self.planned.back());
-                (s.map_or(0, |s| s.line), super::Phase::Rest)
+                let s = planned.front().or(planned.back());
+                (s.map_or(0, |s| s.line), Phase::Rest, PhaseChanges::NONE)
             }
         };
         Segment {
@@ -226,6 +261,7 @@ impl Shaper {
             a,
             line,
             phase,
+            changes,
         }
     }
 
@@ -274,6 +310,7 @@ mod tests {
             a: Vec3::from(a),
             line: (t0 * 1000.0) as u64,
             phase: Phase::Cruise,
+            changes: PhaseChanges::NONE,
         };
         let mut out = vec![seg(
             0.1,
@@ -291,6 +328,19 @@ mod tests {
         chain(&mut out, 0.02, [0.0, 80.0, 0.0], [0.0, 0.0, 0.0]);
         chain(&mut out, 0.032, [0.0, 80.0, 0.0], [0.0, -2500.0, 0.0]);
         out
+    }
+
+    /// The same shaper on X and Y, damping ratio 0.1.
+    fn both_axes(kind: ShaperType, freq_hz: f64) -> InputShaper {
+        let axis = AxisShaper {
+            kind,
+            freq_hz,
+            damping_ratio: 0.1,
+        };
+        InputShaper {
+            x: Some(axis),
+            y: Some(axis),
+        }
     }
 
     /// The planned position at t, directly (rest before and after).
@@ -336,18 +386,128 @@ mod tests {
         assert!((first.t0_s - (0.1 - px.span_s().1.max(py.span_s().1))).abs() < 1e-12);
         let end = chain[chain.len() - 1].t1_s() - px.span_s().0.min(py.span_s().0);
         assert!((last.t1_s() - end).abs() < 1e-12);
-        // At many instants, against the convolution computed directly.
+        assert_convolution(&chain, &shaper, &out);
+    }
+
+    /// At many instants, the commanded pieces `out` of `chain` against the convolution
+    /// computed directly.
+    fn assert_convolution(chain: &[Segment], shaper: &InputShaper, out: &[Segment]) {
+        let (px, py) = (Pulses::of(shaper.x), Pulses::of(shaper.y));
+        let (first, last) = (out[0], out[out.len() - 1]);
         for k in 0..=2000 {
             let t = first.t0_s + (last.t1_s() - first.t0_s) * k as f64 / 2000.0;
             let piece = out.iter().find(|c| t < c.t1_s()).unwrap_or(&last);
             let got = piece.at(t - piece.t0_s).0;
             let conv = |p: &Pulses, axis: usize| -> f64 {
                 p.iter()
-                    .map(|(a, tau)| a * planned_at(&chain, t + tau)[axis])
+                    .map(|(a, tau)| a * planned_at(chain, t + tau)[axis])
                     .sum()
             };
-            let want = Vec3::new(conv(&px, 0), conv(&py, 1), planned_at(&chain, t).z);
+            let want = Vec3::new(conv(&px, 0), conv(&py, 1), planned_at(chain, t).z);
             assert!((got - want).norm() < 1e-9, "t = {t}: {got} vs {want}");
+        }
+    }
+
+    /// Two lines, each from rest through accel, cruise and decel to rest: the first in X
+    /// and Y (Z constant), the second climbing in Z too (Z's acceleration changes with the
+    /// phase). A piece runs on through the first line's planned breaks, which break no
+    /// commanded axis, naming the phases it passes into; through the second's it does not.
+    /// Every planned break and every pulse's shifted break is still a piece's start or a
+    /// phase change of one (the samples there are as before), and each instant is named
+    /// by the planned phase in force then.
+    #[test]
+    fn a_lines_phases_run_on_in_one_piece_and_are_named() {
+        let shaper = both_axes(ShaperType::Mzv, 45.0);
+        let mut chain: Vec<Segment> = Vec::new();
+        let mut p = Vec3::new(0.0, 0.0, 0.3);
+        let mut t = 1.0;
+        for (line, dir) in [(7, Vec3::new(0.6, 0.8, 0.0)), (8, Vec3::new(0.6, 0.0, 0.8))] {
+            let phases = [
+                (Phase::Accel, 0.031, 0.0, 2000.0),
+                (Phase::Cruise, 0.047, 62.0, 0.0),
+                (Phase::Decel, 0.031, 62.0, -2000.0),
+            ];
+            for (phase, dt, v, a) in phases {
+                let seg = Segment {
+                    t0_s: t,
+                    dt_s: dt,
+                    p,
+                    v: dir * v,
+                    a: dir * a,
+                    line,
+                    phase,
+                    changes: PhaseChanges::NONE,
+                };
+                chain.push(seg);
+                (p, t) = (seg.end().0, seg.t1_s());
+            }
+        }
+        let mut s = Shaper::new(&shaper);
+        let mut out = Vec::new();
+        for seg in &chain {
+            s.push(*seg, &mut |c| out.push(c));
+        }
+        s.finish(&mut |c| out.push(c));
+        assert_convolution(&chain, &shaper, &out);
+        // Each planned start and the end, seen by the motion itself and by each pulse.
+        let pulses = Pulses::of(shaper.x);
+        let offsets = std::iter::once(0.0).chain(pulses.iter().map(|(_, tau)| tau));
+        let planned_breaks: Vec<f64> = (chain.iter().map(|s| s.t0_s)).chain([t]).collect();
+        let mut breaks: Vec<f64> = offsets
+            .flat_map(|tau| planned_breaks.iter().map(move |b| b - tau))
+            .collect();
+        breaks.sort_by(f64::total_cmp);
+        breaks.dedup_by(|a, b| *a - *b <= MIN_PIECE_S);
+        let starts_and_changes = |out: &[Segment]| {
+            let mut at: Vec<f64> = out.iter().map(|c| c.t0_s).collect();
+            at.extend(
+                out.iter()
+                    .flat_map(|c| c.changes.at_s)
+                    .filter(|c| c.is_finite()),
+            );
+            at.sort_by(f64::total_cmp);
+            at
+        };
+        let got = starts_and_changes(&out);
+        let inside = |b: &&f64| **b > out[0].t0_s + 1e-9 && **b < t - pulses.span_s().0 - 1e-9;
+        let want: Vec<f64> = breaks.iter().filter(inside).copied().collect();
+        let got_inside: Vec<f64> = got.iter().filter(inside).copied().collect();
+        assert_eq!(got_inside.len(), want.len(), "{got_inside:?} {want:?}");
+        for (g, w) in got_inside.iter().zip(&want) {
+            assert!((g - w).abs() < 1e-9, "{got_inside:?} {want:?}");
+        }
+        // The first line's two inner breaks run on; the second's do not.
+        let changed: Vec<f64> = out
+            .iter()
+            .flat_map(|c| c.changes.at_s)
+            .filter(|c| c.is_finite())
+            .collect();
+        assert_eq!(changed, [chain[1].t0_s, chain[2].t0_s]);
+        assert!(
+            out.iter()
+                .all(|c| c.changes == PhaseChanges::NONE || c.line == 7)
+        );
+        // Each instant named by the planned phase then (away from breaks).
+        let phase_at = |c: &Segment, t: f64| {
+            let n = c.changes.at_s.iter().filter(|&&b| b <= t).count();
+            if n == 0 {
+                c.phase
+            } else {
+                c.changes.then[n - 1]
+            }
+        };
+        for k in 0..=3000 {
+            let at = chain[0].t0_s + (t - chain[0].t0_s) * k as f64 / 3000.0;
+            if breaks.iter().any(|b| (b - at).abs() < 1e-9) {
+                continue;
+            }
+            let planned = chain.iter().find(|s| at < s.t1_s()).unwrap_or(&chain[5]);
+            let piece = out
+                .iter()
+                .find(|c| at < c.t1_s())
+                .unwrap_or(&out[out.len() - 1]);
+            assert_eq!(phase_at(piece, at), planned.phase, "{at}");
+            assert_eq!(piece.line, planned.line, "{at}");
         }
     }
 
@@ -359,16 +519,8 @@ mod tests {
     /// neither may the commanded one.
     #[test]
     fn slivers_between_moves_do_not_jump() {
-        let zv = AxisShaper {
-            kind: ShaperType::Zv,
-            freq_hz: 40.0,
-            damping_ratio: 0.1,
-        };
-        let shaper = InputShaper {
-            x: Some(zv),
-            y: Some(zv),
-        };
-        let (lo, hi) = Pulses::of(Some(zv)).span_s();
+        let shaper = both_axes(ShaperType::Zv, 40.0);
+        let (lo, hi) = Pulses::of(shaper.x).span_s();
         let dt = hi - lo;
         let dir = Vec3::new(0.6, 0.8, 0.0);
         let mut s = Shaper::new(&shaper);
@@ -391,6 +543,7 @@ mod tests {
                     a: dir * a,
                     line: line as u64,
                     phase: Phase::Cruise,
+                    changes: PhaseChanges::NONE,
                 };
                 s.push(seg, &mut |c| out.push(c));
                 p = seg.end().0;

@@ -6,8 +6,9 @@
 //! forward by the pieces it passes instead of bisecting the window at every question: the
 //! same answers as a bisection of the pieces in time order.
 
+use super::MIN_PIECE_S;
 use super::pulses::MAX_PULSES;
-use crate::motion::Segment;
+use crate::motion::{MAX_PHASE_CHANGES, PhaseChanges, Segment};
 use crate::path::Vec3;
 
 /// Dropped pieces are removed from the vector once there are at least this many.
@@ -28,15 +29,60 @@ pub struct Window {
     /// Each piece's start and end, apart: the cursors walk these, 16 bytes a piece where a
     /// `Segment` is 104.
     times: Vec<[f64; 2]>,
+    /// Whether each piece runs on from the one before for the axes the shaper leaves as
+    /// planned (`Shaper::runs_on`): its start breaks no commanded axis.
+    runs_on: Vec<bool>,
     head: usize,
     /// Per offset: the first piece that started after the last `next_start` question.
     starts: [usize; MAX_OFFSETS],
 }
 
 impl Window {
-    pub fn push(&mut self, seg: Segment) {
+    /// Adds the next piece, which runs on from the last or not (`runs_on`).
+    pub fn push(&mut self, seg: Segment, runs_on: bool) {
         self.times.push([seg.t0_s, seg.t1_s()]);
+        self.runs_on.push(runs_on);
         self.pieces.push(seg);
+    }
+
+    /// Whether the piece at `i` runs on from the one before (None past the last).
+    #[inline(always)]
+    pub fn runs_on(&self, i: usize) -> Option<bool> {
+        self.runs_on.get(i).copied()
+    }
+
+    /// The start of the piece at `i`, or past the last the last one's end if it lies
+    /// after `t` (else +∞): the planned motion's next break after `t`, `i` being the
+    /// first piece starting after it.
+    #[inline(always)]
+    pub fn start_or_end(&self, i: usize, t: f64) -> f64 {
+        match self.times.get(i) {
+            Some(s) => s[0],
+            None => (self.head < self.times.len())
+                .then(|| self.times[self.times.len() - 1][1])
+                .filter(|&b| b > t)
+                .unwrap_or(f64::INFINITY),
+        }
+    }
+
+    /// The starts of the pieces after `i` before `t`, with their phases: each runs on
+    /// from the one before, and there are at most [`MAX_PHASE_CHANGES`] of them
+    /// (`Shaper::next_break` breaks at the next). A start less than `MIN_PIECE_S` before
+    /// the next (or `t`) is left out, as the shaper leaves out such a piece.
+    #[inline(always)]
+    pub fn changes(&self, i: usize, t: f64) -> PhaseChanges {
+        let mut changes = PhaseChanges::NONE;
+        let mut n = 0;
+        let after = self.pieces.get(i + 1..).unwrap_or_default();
+        let mut starts = after.iter().take_while(|s| s.t0_s < t).peekable();
+        while let Some(s) = starts.next() {
+            let next = starts.peek().map_or(t, |s| s.t0_s);
+            if next - s.t0_s > MIN_PIECE_S && n < MAX_PHASE_CHANGES {
+                (changes.at_s[n], changes.then[n]) = (s.t0_s, s.phase);
+                n += 1;
+            }
+        }
+        changes
     }
 
     fn live(&self) -> &[Segment] {
@@ -75,6 +121,7 @@ impl Window {
             if self.head >= COMPACT_MIN && self.head >= self.len() {
                 self.pieces.drain(..self.head);
                 self.times.drain(..self.head);
+                self.runs_on.drain(..self.head);
                 for c in &mut self.starts {
                     *c = c.saturating_sub(self.head);
                 }
@@ -87,6 +134,7 @@ impl Window {
     pub fn clear(&mut self) {
         self.pieces.clear();
         self.times.clear();
+        self.runs_on.clear();
         self.head = 0;
         self.starts = [0; MAX_OFFSETS];
     }
@@ -151,7 +199,7 @@ impl Window {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::motion::Phase;
+    use crate::motion::{Phase, PhaseChanges};
 
     fn piece(t0_s: f64, dt_s: f64) -> Segment {
         Segment {
@@ -162,6 +210,7 @@ mod tests {
             a: Vec3::zeros(),
             line: 0,
             phase: Phase::Cruise,
+            changes: PhaseChanges::NONE,
         }
     }
 
@@ -177,7 +226,7 @@ mod tests {
             *t0 += 0.0023;
             for i in 0..n {
                 let dt = 0.001 * (1 + (i * 7) % 5) as f64;
-                w.push(piece(*t0, dt));
+                w.push(piece(*t0, dt), false);
                 *t0 += dt;
             }
         };

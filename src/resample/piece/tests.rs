@@ -1,6 +1,6 @@
 use super::*;
-use crate::motion::Segment;
 use crate::motion::drive::{Drive, DriveStage, Lag, Spring};
+use crate::motion::{PhaseChanges, Segment};
 use crate::resample::StateBox;
 
 const TS: f64 = 0.001;
@@ -14,6 +14,7 @@ fn seg(t0: f64, dt: f64, p: Vec3, v: Vec3, a: Vec3) -> Segment {
         a,
         line: 3,
         phase: Phase::Cruise,
+        changes: PhaseChanges::NONE,
     }
 }
 
@@ -66,8 +67,8 @@ fn a_rigid_corner_between_long_pieces_is_dv_over_ts() {
     let (p, _) = a.end();
     let b = seg(0.1, 0.05, p, vy, Vec3::zeros());
     let jump = vy - vx;
-    let ka = Kicks::around(a.t0_s, a.dt_s, Vec3::zeros(), 0.0, jump, b.dt_s, TS);
-    let kb = Kicks::around(b.t0_s, b.dt_s, jump, a.dt_s, Vec3::zeros(), 0.0, TS);
+    let ka = Kicks::around(&a, Vec3::zeros(), 0.0, jump, b.dt_s, TS);
+    let kb = Kicks::around(&b, jump, a.dt_s, Vec3::zeros(), 0.0, TS);
     let sa = samples(&work(a, ka, true), None);
     let sb = samples(&work(b, kb, false), None);
     let left = sa.last().unwrap();
@@ -109,7 +110,7 @@ fn a_circle_of_short_rigid_chords_shows_v2_over_r_at_every_sample() {
         let s = seg(k as f64 * tau, tau, pt(k), dir(k) * v, Vec3::zeros());
         let jin = (dir(k) - dir(k - 1)) * v;
         let jout = (dir(k + 1) - dir(k)) * v;
-        let kicks = Kicks::around(s.t0_s, tau, jin, tau, jout, tau, TS);
+        let kicks = Kicks::around(&s, jin, tau, jout, tau, TS);
         for x in samples(&work(s, kicks, true), None) {
             acc.push(x.acc_mm_s2.norm());
         }
@@ -176,6 +177,63 @@ fn ringing_piece() -> (PieceWork, Response) {
         corner_until_s: 12.35,
     };
     (with_end(w, &r), r)
+}
+
+/// `w` (the ringing piece) passing into two more phases: one between grid points, one on
+/// a grid point.
+fn phased(mut w: PieceWork) -> PieceWork {
+    let c = &mut w.commanded.changes;
+    *c = PhaseChanges {
+        at_s: [12.40005, 12500.0 * TS],
+        then: [Phase::Decel, Phase::Accel],
+    };
+    w
+}
+
+/// A piece with phase changes is sampled as its parts were when the shaper made a piece of
+/// each: at the same instants (a change on a grid point once), each sample named by its
+/// part's phase, the states those pieces had (each part's lag the drive's closed form from
+/// the piece's start), with the whole piece's box holding them all.
+#[test]
+fn a_piece_through_phases_samples_as_its_parts_did() {
+    let (w, r) = ringing_piece();
+    let w = phased(w);
+    let seg = w.commanded;
+    let bounds = [seg.t0_s, 12.40005, 12500.0 * TS, seg.t1_s()];
+    let phases = [seg.phase, Phase::Decel, Phase::Accel];
+    let mut want = Vec::new();
+    for i in 0..3 {
+        let (t0, t1) = (bounds[i], bounds[i + 1]);
+        let (p, v, _) = seg.at(t0 - seg.t0_s);
+        let part = PieceWork {
+            commanded: Segment {
+                phase: phases[i],
+                ..self::seg(t0, t1 - t0, p, v, seg.a)
+            },
+            lag: r.lag_at(&w.lag, seg.a, t0 - seg.t0_s),
+            end_sample: false,
+            ..w
+        };
+        want.extend(samples(&with_end(part, &r), Some(&r)));
+    }
+    let got = samples(&w, Some(&r));
+    assert_eq!(got.len(), want.len());
+    assert_eq!(piece_samples(&w, TS), got.len() as u64);
+    let on_change = |t: f64| got.iter().filter(|s| s.t_s == t).count();
+    assert_eq!((on_change(bounds[1]), on_change(bounds[2])), (1, 1));
+    for (g, x) in got.iter().zip(&want) {
+        assert_eq!((g.t_s, g.phase, g.line), (x.t_s, x.phase, x.line));
+        assert!((g.pos_mm - x.pos_mm).norm() < 1e-9, "{g:?} {x:?}");
+        assert!((g.vel_mm_s - x.vel_mm_s).norm() < 1e-7, "{g:?} {x:?}");
+        assert!((g.acc_mm_s2 - x.acc_mm_s2).norm() < 1e-5, "{g:?} {x:?}");
+    }
+    let phase_of = |t: f64| match t {
+        t if t < 12.35 => Phase::Corner,
+        t if t < bounds[1] => Phase::Cruise,
+        t if t < bounds[2] => Phase::Decel,
+        _ => Phase::Accel,
+    };
+    assert!(got.iter().all(|s| s.phase == phase_of(s.t_s)));
 }
 
 /// `w` with the lag at its end that the drive stage gives it.
@@ -298,7 +356,7 @@ fn a_whole_piece_box_holds_every_sample_and_counts_them() {
         }
     }
     let mut shorts = 0;
-    for w in [w, on_grid, short, at_grid, swings[0], swings[1]] {
+    for w in [w, on_grid, short, at_grid, swings[0], swings[1], phased(w)] {
         let dense = samples(&w, Some(&r));
         let (b, count) = (piece_states(&w, &r, TS, Fit::Swing), piece_samples(&w, TS));
         assert_eq!(count, dense.len() as u64);
@@ -358,12 +416,15 @@ proptest::proptest! {
     /// print and hours into it, try the count of a whole chain.
     #[test]
     fn a_chains_count_is_its_pieces_counts(
-        pieces in proptest::collection::vec((0.0..0.004f64, 0u8..6, proptest::bool::ANY), 1..12),
+        pieces in proptest::collection::vec(
+            (0.0..0.004f64, 0u8..6, proptest::bool::ANY, 0u8..3),
+            1..12,
+        ),
         start in proptest::prop_oneof![0.0..0.01f64, 1e3..3e4f64],
     ) {
         let mut t = start;
         let mut works = Vec::new();
-        for (dt, kind, end_sample) in pieces {
+        for (dt, kind, end_sample, changes) in pieces {
             // 0: contiguous; 1: starts on the next grid point; 2: a gap; 3: zero length;
             // 4 and 5: contiguous, ending on the next grid point or the one after.
             match kind {
@@ -376,7 +437,18 @@ proptest::proptest! {
                 4 | 5 => ((t / TS).floor() + f64::from(kind - 3)) * TS - t,
                 _ => dt,
             };
-            let s = seg(t, dt, Vec3::zeros(), Vec3::zeros(), Vec3::zeros());
+            let mut s = seg(t, dt, Vec3::zeros(), Vec3::zeros(), Vec3::zeros());
+            // Phase changes: none, one inside, or one on the piece's first grid point
+            // inside (if it has one) and one after it.
+            let on_grid = first_inside(t, TS) as f64 * TS;
+            let at: &[f64] = match changes {
+                1 if dt > 0.0 => &[t + 0.4 * dt],
+                2 if on_grid < t + 0.5 * dt => &[on_grid, t + 0.75 * dt],
+                _ => &[],
+            };
+            for (i, &c) in at.iter().enumerate() {
+                (s.changes.at_s[i], s.changes.then[i]) = (c, Phase::Decel);
+            }
             works.push(work(s, Kicks::default(), end_sample));
             t = s.t1_s();
         }
