@@ -401,6 +401,7 @@ mod tests {
             a: x(a),
             line: 1,
             phase: Phase::Cruise,
+            later_phases: PhaseChanges::NO_PHASES,
             changes: PhaseChanges::NONE,
         }
     }

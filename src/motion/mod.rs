@@ -68,17 +68,19 @@ pub struct Segment {
     pub line: u64,
     /// The phase at t0; later ones where the piece spans its line's planned phases.
     pub phase: Phase,
+    /// The phases from each of `changes` on (apart from them: a struct of both would be
+    /// padded to 24 bytes, and a piece's work past 240, `resample::PieceWork`).
+    pub later_phases: [Phase; MAX_PHASE_CHANGES],
     pub changes: PhaseChanges,
 }
 
 /// Where a piece passes into its line's next planned phases: the shaper's commanded pieces
 /// run on through a planned break of the same line that neither the shaped X and Y nor the
-/// unshaped axes break at ([`shaper`]). From `at_s[i]` on the phase is `then[i]`; unused
-/// entries are at +∞.
+/// unshaped axes break at ([`shaper`]). From `at_s[i]` on the phase is the piece's
+/// `later_phases[i]`; unused entries are at +∞.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PhaseChanges {
     pub at_s: [f64; MAX_PHASE_CHANGES],
-    pub then: [Phase; MAX_PHASE_CHANGES],
 }
 
 /// The most phase changes a piece holds: a planned move's accel, cruise and decel.
@@ -87,8 +89,10 @@ pub const MAX_PHASE_CHANGES: usize = 2;
 impl PhaseChanges {
     pub const NONE: PhaseChanges = PhaseChanges {
         at_s: [f64::INFINITY; MAX_PHASE_CHANGES],
-        then: [Phase::Rest; MAX_PHASE_CHANGES],
     };
+
+    /// [`Segment::later_phases`] of a piece without changes.
+    pub const NO_PHASES: [Phase; MAX_PHASE_CHANGES] = [Phase::Rest; MAX_PHASE_CHANGES];
 }
 
 impl Segment {
@@ -102,6 +106,7 @@ impl Segment {
             a: Vec3::zeros(),
             line,
             phase: Phase::Rest,
+            later_phases: PhaseChanges::NO_PHASES,
             changes: PhaseChanges::NONE,
         }
     }

@@ -51,6 +51,7 @@ impl PlannedPieces {
                     a: dir * acc,
                     line: mv.line,
                     phase,
+                    later_phases: PhaseChanges::NO_PHASES,
                     changes: PhaseChanges::NONE,
                 });
                 s += v0 * dt + 0.5 * acc * dt * dt;

@@ -75,6 +75,7 @@ pub fn emit(
                     a: dir * r.accel,
                     line,
                     phase: r.phase,
+                    later_phases: PhaseChanges::NO_PHASES,
                     changes: PhaseChanges::NONE,
                 });
             }

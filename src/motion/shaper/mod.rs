@@ -246,13 +246,15 @@ impl Shaper {
                 }
             }
         }
-        let (line, phase, changes) = match own.and_then(|i| Some((i, planned.get(i)?))) {
-            Some((i, s)) => (s.line, s.phase, planned.changes(i, tb)),
-            None => {
-                let s = planned.front().or(planned.back());
-                (s.map_or(0, |s| s.line), Phase::Rest, PhaseChanges::NONE)
-            }
-        };
+        let (line, phase, (changes, later_phases)) =
+            match own.and_then(|i| Some((i, planned.get(i)?))) {
+                Some((i, s)) => (s.line, s.phase, planned.changes(i, tb)),
+                None => {
+                    let s = planned.front().or(planned.back());
+                    let none = (PhaseChanges::NONE, PhaseChanges::NO_PHASES);
+                    (s.map_or(0, |s| s.line), Phase::Rest, none)
+                }
+            };
         Segment {
             t0_s: ta,
             dt_s: tb - ta,
@@ -261,6 +263,7 @@ impl Shaper {
             a,
             line,
             phase,
+            later_phases,
             changes,
         }
     }
@@ -310,6 +313,7 @@ mod tests {
             a: Vec3::from(a),
             line: (t0 * 1000.0) as u64,
             phase: Phase::Cruise,
+            later_phases: PhaseChanges::NO_PHASES,
             changes: PhaseChanges::NONE,
         };
         let mut out = vec![seg(
@@ -436,6 +440,7 @@ mod tests {
                     a: dir * a,
                     line,
                     phase,
+                    later_phases: PhaseChanges::NO_PHASES,
                     changes: PhaseChanges::NONE,
                 };
                 chain.push(seg);
@@ -493,7 +498,7 @@ mod tests {
             if n == 0 {
                 c.phase
             } else {
-                c.changes.then[n - 1]
+                c.later_phases[n - 1]
             }
         };
         for k in 0..=3000 {
@@ -543,6 +548,7 @@ mod tests {
                     a: dir * a,
                     line: line as u64,
                     phase: Phase::Cruise,
+                    later_phases: PhaseChanges::NO_PHASES,
                     changes: PhaseChanges::NONE,
                 };
                 s.push(seg, &mut |c| out.push(c));

@@ -8,7 +8,7 @@
 
 use super::MIN_PIECE_S;
 use super::pulses::MAX_PULSES;
-use crate::motion::{MAX_PHASE_CHANGES, PhaseChanges, Segment};
+use crate::motion::{MAX_PHASE_CHANGES, Phase, PhaseChanges, Segment};
 use crate::path::Vec3;
 
 /// Dropped pieces are removed from the vector once there are at least this many.
@@ -70,19 +70,20 @@ impl Window {
     /// (`Shaper::next_break` breaks at the next). A start less than `MIN_PIECE_S` before
     /// the next (or `t`) is left out, as the shaper leaves out such a piece.
     #[inline(always)]
-    pub fn changes(&self, i: usize, t: f64) -> PhaseChanges {
+    pub fn changes(&self, i: usize, t: f64) -> (PhaseChanges, [Phase; MAX_PHASE_CHANGES]) {
         let mut changes = PhaseChanges::NONE;
+        let mut phases = PhaseChanges::NO_PHASES;
         let mut n = 0;
         let after = self.pieces.get(i + 1..).unwrap_or_default();
         let mut starts = after.iter().take_while(|s| s.t0_s < t).peekable();
         while let Some(s) = starts.next() {
             let next = starts.peek().map_or(t, |s| s.t0_s);
             if next - s.t0_s > MIN_PIECE_S && n < MAX_PHASE_CHANGES {
-                (changes.at_s[n], changes.then[n]) = (s.t0_s, s.phase);
+                (changes.at_s[n], phases[n]) = (s.t0_s, s.phase);
                 n += 1;
             }
         }
-        changes
+        (changes, phases)
     }
 
     fn live(&self) -> &[Segment] {
@@ -210,6 +211,7 @@ mod tests {
             a: Vec3::zeros(),
             line: 0,
             phase: Phase::Cruise,
+            later_phases: PhaseChanges::NO_PHASES,
             changes: PhaseChanges::NONE,
         }
     }

@@ -14,6 +14,7 @@ fn seg(t0: f64, dt: f64, p: Vec3, v: Vec3, a: Vec3) -> Segment {
         a,
         line: 3,
         phase: Phase::Cruise,
+        later_phases: PhaseChanges::NO_PHASES,
         changes: PhaseChanges::NONE,
     }
 }
@@ -182,11 +183,10 @@ fn ringing_piece() -> (PieceWork, Response) {
 /// `w` (the ringing piece) passing into two more phases: one between grid points, one on
 /// a grid point.
 fn phased(mut w: PieceWork) -> PieceWork {
-    let c = &mut w.commanded.changes;
-    *c = PhaseChanges {
+    w.commanded.changes = PhaseChanges {
         at_s: [12.40005, 12500.0 * TS],
-        then: [Phase::Decel, Phase::Accel],
     };
+    w.commanded.later_phases = [Phase::Decel, Phase::Accel];
     w
 }
 
@@ -447,7 +447,7 @@ proptest::proptest! {
                 _ => &[],
             };
             for (i, &c) in at.iter().enumerate() {
-                (s.changes.at_s[i], s.changes.then[i]) = (c, Phase::Decel);
+                (s.changes.at_s[i], s.later_phases[i]) = (c, Phase::Decel);
             }
             works.push(work(s, Kicks::default(), end_sample));
             t = s.t1_s();
