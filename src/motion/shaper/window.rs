@@ -161,7 +161,9 @@ impl Window {
     ///
     /// No search: `k`'s [`Self::next_start`] cursor must have been asked last for a time
     /// at or before `t` with no piece starting in between, as the shaper asks it right after
-    /// its breaks (`Shaper::next_break`), whose cursors move only there.
+    /// its breaks (`Shaper::next_break`), whose cursors move only there. (Pieces that start
+    /// in between, for the offset 0 the starts a commanded piece runs on through, leave the
+    /// answer the piece in force at the time last asked.)
     #[inline(always)]
     pub fn planned_at(&self, k: usize, t: f64) -> Option<usize> {
         let next = self.starts[k];
