@@ -8,6 +8,7 @@ mod interp;
 mod marlin;
 pub mod parse;
 pub mod reader;
+mod scan;
 pub mod sniff;
 
 use std::io::Read;

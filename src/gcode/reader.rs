@@ -66,7 +66,7 @@ impl<R: Read> ChunkReader<R> {
     pub fn next_chunk(&mut self) -> io::Result<Option<Chunk<'_>>> {
         loop {
             let avail = &self.buf[self.start..self.end];
-            if let Some(i) = memchr::memchr(b'\n', avail) {
+            if let Some(i) = super::scan::find(avail, b'\n') {
                 return Ok(Some(self.take(i + 1, true)));
             }
             if self.eof {

@@ -62,7 +62,7 @@ fn byte_eq(b: u8) -> impl Fn(&[u8]) -> Res<'_, u8> {
 pub(super) fn code_and_comment(line: &[u8]) -> (&[u8], Option<&[u8]>, Option<usize>) {
     // One pass to the first `;` or `*` (memchr's, many bytes at a time); a second one only
     // after a `*` (rare).
-    match memchr::memchr2(b';', b'*', line).map(|i| line.split_at(i)) {
+    match crate::gcode::scan::find2(line, b';', b'*').map(|i| line.split_at(i)) {
         None => (line, None, None),
         Some((code, [b';', comment @ ..])) => (code, Some(comment), None),
         _ => {
