@@ -11,6 +11,7 @@
 //! rigid model has an impulse.
 
 mod swing;
+mod turn;
 
 use super::{CONTINUITY_MM, Segment};
 use crate::path::Vec3;
@@ -112,10 +113,11 @@ impl Response {
         self.lag_after(start, a_c, self.turn(tau_s))
     }
 
-    /// What [`Self::lag_at`] needs of τ: sin and cos of ω_dτ, e^(−στ).
+    /// What [`Self::lag_at`] needs of τ: sin and cos of ω_dτ (by [`turn::sin_cos`]),
+    /// e^(−στ).
     #[inline(always)]
     fn turn(&self, tau_s: f64) -> Turn {
-        let (sin, cos) = (self.omega_d * tau_s).sin_cos();
+        let (sin, cos) = turn::sin_cos(self.omega_d * tau_s);
         Turn {
             sin,
             cos,
