@@ -263,6 +263,30 @@ fn unexpected_characters_and_duplicates() {
 }
 
 #[test]
+fn each_letters_word_is_the_last_one_kept() {
+    // Duplicates, words without values, lower case, a comment between, more words than
+    // kept (the 17th and later are dropped, a letter among them included), an extended
+    // command and a blank line: `word` answers what a search of the words from the end does.
+    let many: String = (0..20)
+        .map(|i| format!(" {}{i}", char::from(b'A' + i % 7)))
+        .collect();
+    let lines = [
+        "G1 X1 Y2 X3 E.5 F1200".to_string(),
+        "G28 X Y z7 (note) Z8".to_string(),
+        format!("G1{many} W9"),
+        "SET_VELOCITY_LIMIT ACCEL=3000".to_string(),
+        String::new(),
+    ];
+    for line in &lines {
+        let p = parse_line(line.as_bytes());
+        for letter in (b'@'..=b'z').chain([0, b'*', 255]) {
+            let search = p.words().iter().rev().find(|w| w.letter == letter);
+            assert_eq!(p.word(letter), search, "{line:?} {}", char::from(letter));
+        }
+    }
+}
+
+#[test]
 fn short_decimals_match_fast_float() {
     // Against fast-float2 (correctly rounded), over many shapes of numbers.
     let mut x: u64 = 0x9E37_79B9_7F4A_7C15;
