@@ -37,7 +37,7 @@ fn plan(machine: &Machine, events: &[Event]) -> Vec<PlannedMove> {
     let mut planner = Planner::new(machine);
     let mut out = Vec::new();
     for e in events {
-        planner.push(*e, &mut out);
+        planner.push(e, &mut out);
     }
     planner.finish(&mut out);
     out

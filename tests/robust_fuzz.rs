@@ -182,7 +182,7 @@ fn check_planner(data: &[u8], machine: &Machine) -> (usize, f64) {
             if let Event::Move(m) = &e {
                 move_lines.push(m.line);
             }
-            planner.push(e, &mut out);
+            planner.push(&e, &mut out);
         },
         |_| {},
     )
@@ -514,7 +514,7 @@ proptest! {
         let mut planner = Planner::new(&machine);
         let mut out = Vec::new();
         for e in events {
-            planner.push(e, &mut out);
+            planner.push(&e, &mut out);
         }
         planner.finish(&mut out);
         out.iter().for_each(check_planned);

@@ -46,7 +46,7 @@ impl Klipper {
 
 impl Firmware for Klipper {
     fn push(&mut self, event: &Event, commanded: &mut Vec<Segment>) {
-        self.planner.push(*event, &mut self.planned);
+        self.planner.push(event, &mut self.planned);
         self.hand_on(commanded);
         if let Event::Shaper { change, .. } = event {
             // The Stop before it has flushed the lookahead: the moves after it are shaped

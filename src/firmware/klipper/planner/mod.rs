@@ -67,20 +67,22 @@ impl Planner {
     }
 
     /// Takes the next event; appends to `out` the moves whose plan is now final.
-    pub fn push(&mut self, event: Event, out: &mut Vec<PlannedMove>) {
+    /// Takes the event by reference: an `Event` is large, and taken by value each was
+    /// copied by a call to `memcpy`.
+    pub fn push(&mut self, event: &Event, out: &mut Vec<PlannedMove>) {
         match event {
             Event::Move(m) => {
-                if let Some(q) = self.limits.queued_move(&m) {
+                if let Some(q) = self.limits.queued_move(m) {
                     self.lookahead.add(q, out);
                 }
             }
             Event::Stop { dwell_s, .. } => {
                 self.lookahead.flush_all(out);
-                if dwell_s.is_finite() && dwell_s > 0.0 {
+                if dwell_s.is_finite() && *dwell_s > 0.0 {
                     self.lookahead.print_time_s += dwell_s;
                 }
             }
-            Event::Limits { change, .. } => self.limits.apply(&change),
+            Event::Limits { change, .. } => self.limits.apply(change),
             // The shaper acts after planning; the Stop before it has flushed the lookahead.
             Event::Shaper { .. } => {}
             // Marlin's settings do not reach Klipper (the interpreter emits them only in

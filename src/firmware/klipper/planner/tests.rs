@@ -94,7 +94,7 @@ fn plan_with(machine: &Machine, events: &[Event]) -> (Vec<PlannedMove>, f64) {
     let mut p = Planner::new(machine);
     let mut out = Vec::new();
     for e in events {
-        p.push(*e, &mut out);
+        p.push(e, &mut out);
     }
     p.finish(&mut out);
     check_consistent(&out);
@@ -572,7 +572,7 @@ fn lazy_and_whole(mach: &Machine, events: &[Event]) -> [(Vec<PlannedMove>, f64, 
         let mut out = Vec::new();
         let mut max_queued = 0;
         for e in events {
-            p.push(*e, &mut out);
+            p.push(e, &mut out);
             max_queued = max_queued.max(p.queued());
         }
         if !lazy {
@@ -617,7 +617,7 @@ fn queue_stays_short_on_a_million_segment_line() {
     for i in 0..1_000_000u32 {
         let x0 = -5000.0 + 0.01 * f64::from(i);
         let path = line([x0, 0.0, 0.0], [x0 + 0.01, 0.0, 0.0]);
-        p.push(mv(u64::from(i) + 1, path, 0.0, 100.0), &mut out);
+        p.push(&mv(u64::from(i) + 1, path, 0.0, 100.0), &mut out);
         max_queued = max_queued.max(p.queued());
         if i >= 10_000 {
             max_later = max_later.max(p.queued());
@@ -661,7 +661,7 @@ fn queue_cap_bounds_a_ramp_that_never_peaks() {
     let mut got = Vec::new();
     let mut max_queued = 0;
     for e in &events {
-        capped.push(*e, &mut got);
+        capped.push(e, &mut got);
         max_queued = max_queued.max(capped.queued());
     }
     capped.finish(&mut got);
@@ -716,9 +716,9 @@ fn klipper_before_2024_keeps_its_accel_to_decel_when_accel_changes() {
         };
         let mut planner = Planner::new(m);
         let mut out = Vec::new();
-        planner.push(Event::Limits { line: 1, change }, &mut out);
+        planner.push(&Event::Limits { line: 1, change }, &mut out);
         planner.push(
-            mv(2, line([0.0, 0.0, 0.0], [10.0, 0.0, 0.0]), 0.0, 300.0),
+            &mv(2, line([0.0, 0.0, 0.0], [10.0, 0.0, 0.0]), 0.0, 300.0),
             &mut out,
         );
         planner.finish(&mut out);
