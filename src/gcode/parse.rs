@@ -354,7 +354,6 @@ fn classic_words<'a>(p: &mut ParsedLine<'a>, args: &'a [u8]) {
     } else {
         Severity::Warning
     };
-    let mut seen = 0u32; // bit per letter
     let mut after_number = false; // the previous token was a number, no blank since
     let mut rest = args;
     while let Ok((r, (blank, (at, token)))) = grammar::blank_token(rest) {
@@ -387,11 +386,11 @@ fn classic_words<'a>(p: &mut ParsedLine<'a>, args: &'a [u8]) {
                         None
                     }
                 };
+                // The letters kept so far: a word that is not kept ends the line's words.
                 let bit = 1u32 << (letter - b'A');
-                if seen & bit != 0 {
+                if p.letters & bit != 0 {
                     p.diag(col, Severity::Warning, DiagKind::DuplicateWord(letter));
                 }
-                seen |= bit;
                 let word = Word {
                     letter,
                     value,
