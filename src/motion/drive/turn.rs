@@ -1,8 +1,8 @@
-//! sin and cos of the lag's turn ω_d·τ over a piece (`Response::turn`), in about half the
-//! instructions of the C library's `sincos`.
+//! sin and cos of the lag's turn ω_d·τ over a piece (`Response::turn`), in 77 instructions
+//! where the C library's `sincos` takes 128.
 //!
 //! The drive stage turns the lag once per commanded piece, and most pieces' durations are
-//! new (70 % without a shaper on the corpus's bunny), so `sincos` was 11 % of the drive
+//! new (70 % without a shaper on the corpus's bunny), so `sincos` was 17 % of the drive
 //! thread's instructions (docs/performance.md, fourteenth session). Its arguments are
 //! bounded here (a piece lasts seconds at most, ω_d·τ a few thousand): the reduction by
 //! π/2 in three parts (Cody and Waite) is exact enough up to [`MAX_REDUCED`], and the
