@@ -21,6 +21,7 @@
 //! of the line up to `;` as free text, as Klipper reads them. A `*` followed by digits ends
 //! the command part: the checksum, XOR of every byte before the `*`.
 
+mod common;
 mod grammar;
 
 use arrayvec::ArrayVec;
@@ -288,12 +289,22 @@ impl<'a> ParsedLine<'a> {
         }
     }
 
-    /// Parses the line given to [`Self::blank`].
+    /// Parses the line given to [`Self::blank`]: a common line in one pass
+    /// ([`Self::parse_common`]), any other by the grammar.
     pub fn parse(&mut self) {
+        let (code, comment, last_star) = grammar::code_and_comment(self.line);
+        self.comment = comment;
+        if last_star.is_none() && self.parse_common(code) {
+            return;
+        }
+        self.parse_grammar(code, last_star);
+    }
+
+    /// Parses the line by the grammar, from its code part and the place of its last `*`
+    /// ([`grammar::code_and_comment`]; the comment is kept).
+    fn parse_grammar(&mut self, mut code: &'a [u8], last_star: Option<usize>) {
         let line = self.line;
         let p = self;
-        let (mut code, comment, last_star) = grammar::code_and_comment(line);
-        p.comment = comment;
         if let Some(star) = last_star
             && let Ok((_, written)) = grammar::checksum(&code[star..])
         {
