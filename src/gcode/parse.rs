@@ -292,11 +292,11 @@ impl<'a> ParsedLine<'a> {
     /// Parses the line given to [`Self::blank`]: a common line in one pass
     /// ([`Self::parse_common`]), any other by the grammar.
     pub fn parse(&mut self) {
-        let (code, comment, last_star) = grammar::code_and_comment(self.line);
-        self.comment = comment;
-        if last_star.is_none() && self.parse_common(code) {
+        if self.parse_common(self.line) {
             return;
         }
+        let (code, comment, last_star) = grammar::code_and_comment(self.line);
+        self.comment = comment;
         self.parse_grammar(code, last_star);
     }
 
