@@ -202,12 +202,7 @@ mod tests {
             "G1  X1   Y2  ",
             "G1 X.123456789012345 Y-123456.789012345 Z999999999",
             "G123456789 X1",
-            &format!(
-                "G1{}",
-                (b'A'..=b'P')
-                    .map(|l| format!(" {}1", char::from(l)))
-                    .collect::<String>()
-            ),
+            &many(MAX_WORDS),
         ] {
             assert!(common(line.as_bytes()), "{line:?} not taken");
         }
@@ -241,15 +236,19 @@ mod tests {
             "G1 Z1000000000",
             "G1 X1 Y2*7",
             "G1 X\u{e9}",
-            &format!(
-                "G1{}",
-                (b'A'..=b'Q')
-                    .map(|l| format!(" {}1", char::from(l)))
-                    .collect::<String>()
-            ),
+            &many(MAX_WORDS + 1),
         ] {
             assert!(!common(line.as_bytes()), "{line:?} taken");
         }
+    }
+
+    /// A G1 of `n` words of different letters from A on.
+    fn many(n: usize) -> String {
+        let words: String = (b'A'..=b'Z')
+            .take(n)
+            .map(|l| format!(" {}1", char::from(l)))
+            .collect();
+        format!("G1{words}")
     }
 
     /// Bytes that make common lines and every way of not being one.
