@@ -148,8 +148,11 @@ impl Sequencer {
     #[inline(always)]
     fn piece(&mut self, c: &Segment) {
         let step = self.drive.push(c);
-        self.close_last(Some((c, &step)));
-        self.add(c, &step);
+        // Whether the velocity jumps at the piece's start: the last piece's end sample and
+        // this one's corner ask the same (a jump is zero where the motion is not continuous).
+        let jumps = step.jump.norm() > JUMP_MIN_MM_S;
+        self.close_last(Some((c, &step, jumps)));
+        self.add(c, &step, jumps);
     }
 
     /// The end of the motion: the drive's settling, the last piece, the lines checked
@@ -214,20 +217,20 @@ impl Sequencer {
         self.batch.pieces.len() - usize::from(self.open.is_some())
     }
 
-    /// Closes the batch's last piece, now that its successor `next` (the commanded piece
-    /// and what the drive made of it) is known, or that there is none: its end sample
-    /// where the velocity jumps there, and with the rigid model the impulses around it.
+    /// Closes the batch's last piece, now that its successor `next` (the commanded piece,
+    /// what the drive made of it, and whether the velocity jumps there) is known, or that
+    /// there is none: its end sample where the velocity jumps there, and with the rigid
+    /// model the impulses around it.
     #[inline(always)]
-    fn close_last(&mut self, next: Option<(&Segment, &DriveStep)>) {
+    fn close_last(&mut self, next: Option<(&Segment, &DriveStep, bool)>) {
         let (Some(open), Some(last)) = (self.open.take(), self.batch.pieces.last_mut()) else {
             return;
         };
-        let jumps = |j: Vec3| j.norm() > JUMP_MIN_MM_S;
-        let (jump_out, next) = match next {
-            Some((c, step)) if step.continuous => (step.jump, Some(c)),
-            _ => (Vec3::zeros(), None),
+        let (jump_out, next, jumps) = match next {
+            Some((c, step, jumps)) if step.continuous => (step.jump, Some(c), jumps),
+            _ => (Vec3::zeros(), None, false),
         };
-        last.end_sample = jumps(jump_out);
+        last.end_sample = jumps;
         if self.response.is_none() {
             let next_dt = next.map_or(0.0, Segment::first_part_s);
             let accel_step = next.is_some_and(|c| last.commanded.a != c.a);
@@ -247,8 +250,8 @@ impl Sequencer {
     /// Adds the sampling work of the commanded piece `c`, with what the drive made of it,
     /// to its line's group; open until its successor comes.
     #[inline(always)]
-    fn add(&mut self, c: &Segment, step: &DriveStep) {
-        if step.jump.norm() > JUMP_MIN_MM_S {
+    fn add(&mut self, c: &Segment, step: &DriveStep, jumps: bool) {
+        if jumps {
             self.corner_until_s = match &self.response {
                 Some(r) => c.t0_s + 0.5 * r.period_s(),
                 None => f64::NEG_INFINITY,
