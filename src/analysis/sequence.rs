@@ -136,11 +136,12 @@ impl Sequencer {
     }
 
     /// Takes the next piece of the commanded motion.
+    #[inline(always)]
     pub fn commanded(&mut self, c: &Segment) {
-        self.span_s = Some(match self.span_s {
-            None => (c.t0_s, c.t1_s()),
-            Some((a, _)) => (a, c.t1_s()),
-        });
+        match &mut self.span_s {
+            Some((_, end)) => *end = c.t1_s(),
+            None => self.span_s = Some((c.t0_s, c.t1_s())),
+        }
         self.piece(c);
     }
 
