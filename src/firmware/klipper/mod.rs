@@ -36,6 +36,14 @@ impl Klipper {
 
     /// The planned moves now final, as pieces through the shaper.
     fn hand_on(&mut self, commanded: &mut Vec<Segment>) {
+        if self.shaper.passes_through() {
+            // No shaper: the planned pieces are the commanded ones, pushed where they are
+            // made (through the shaper, a call per piece).
+            for mv in self.planned.drain(..) {
+                self.pieces.push(&mv, &mut |seg| commanded.push(seg));
+            }
+            return;
+        }
         for mv in self.planned.drain(..) {
             let shaper = &mut self.shaper;
             self.pieces
@@ -60,5 +68,53 @@ impl Firmware for Klipper {
         self.planner.finish(&mut self.planned);
         self.hand_on(commanded);
         self.shaper.finish(&mut |c| commanded.push(c));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gcode::interpret;
+    use crate::machine::test_support::kossel_machine;
+    use crate::motion::shaper::{AxisShaper, ShaperType};
+    use crate::path::Vec3;
+
+    /// The commanded pieces of `gcode` on `machine`.
+    fn commanded(machine: &Machine, gcode: &str) -> Vec<Segment> {
+        let mut klipper = Klipper::new(machine);
+        let mut out = Vec::new();
+        let home = Vec3::new(0.0, 0.0, machine.geometry.home_z_mm);
+        interpret(
+            gcode.as_bytes(),
+            home,
+            machine.dialect(),
+            |e| klipper.push(&e, &mut out),
+            |_| {},
+        )
+        .expect("reads");
+        klipper.finish(&mut out);
+        out
+    }
+
+    /// Without a shaper the planned pieces go on as they are; a SET_INPUT_SHAPER then shapes
+    /// the moves after it as a profile with that shaper does from the start.
+    #[test]
+    fn a_shaper_set_in_the_file_shapes_what_follows() {
+        let moves = "G1 X10 Y5 F6000\nG1 X-20 Y15\nG1 X5 Y-25\nG1 X0 Y0\n";
+        let plain = kossel_machine();
+        let mut shaped = kossel_machine();
+        let mzv = Some(AxisShaper {
+            kind: ShaperType::Mzv,
+            freq_hz: 40.0,
+            damping_ratio: 0.1,
+        });
+        (shaped.input_shaper.x, shaped.input_shaper.y) = (mzv, mzv);
+        let unshaped = commanded(&plain, moves);
+        let set = "SET_INPUT_SHAPER SHAPER_TYPE=MZV SHAPER_FREQ_X=40 SHAPER_FREQ_Y=40 \
+                   DAMPING_RATIO_X=0.1 DAMPING_RATIO_Y=0.1\n";
+        let later = commanded(&plain, &format!("{set}{moves}"));
+        let from_start = commanded(&shaped, &format!("\n{moves}"));
+        assert!(unshaped.len() > 4 && later.len() > 2 * unshaped.len());
+        assert_eq!(later, from_start);
     }
 }

@@ -101,6 +101,12 @@ impl Shaper {
         self.shaped == [false; 2]
     }
 
+    /// Whether [`Self::push`] hands each planned piece on as it is, now and for the next
+    /// piece (no shaper, none pending).
+    pub fn passes_through(&self) -> bool {
+        self.pending.is_none() && self.is_identity()
+    }
+
     /// Takes the next planned piece; hands on the commanded pieces now final. A piece that
     /// does not start where the last ended (a re-homing) ends the motion so far first.
     pub fn push(&mut self, seg: Segment, out: &mut impl FnMut(Segment)) {
