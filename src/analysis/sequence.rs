@@ -135,7 +135,8 @@ impl Sequencer {
         self.checked.extend(checks.drain(..));
     }
 
-    /// Takes the next piece of the commanded motion.
+    /// Takes the next piece of the commanded motion. Inlined into the drive thread's loop:
+    /// a call per piece cost 2 % of that thread's instructions with a shaper.
     #[inline(always)]
     pub fn commanded(&mut self, c: &Segment) {
         match &mut self.span_s {
