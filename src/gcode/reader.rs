@@ -62,7 +62,10 @@ impl<R: Read> ChunkReader<R> {
         self.bytes_read
     }
 
-    /// The next piece, or `None` at the end of the input.
+    /// The next piece, or `None` at the end of the input. Inlined into the line reader (its
+    /// result went through memory: 0.7 % of the firmware thread's instructions), the refill
+    /// kept out of line.
+    #[inline(always)]
     pub fn next_chunk(&mut self) -> io::Result<Option<Chunk<'_>>> {
         loop {
             let avail = &self.buf[self.start..self.end];
@@ -106,6 +109,7 @@ impl<R: Read> ChunkReader<R> {
     }
 
     /// Moves the unread bytes to the front and reads more after them.
+    #[inline(never)]
     fn fill(&mut self) -> io::Result<()> {
         if self.start > 0 {
             self.buf.copy_within(self.start..self.end, 0);
