@@ -1,5 +1,6 @@
-//! The parallel model stage gives exactly what one thread gives: the same report and the
-//! same trace, byte for byte, whatever the number of threads (`DELTA_GCODE_THREADS`).
+//! The pipeline on several threads gives exactly what one thread gives: the same report and
+//! the same trace, byte for byte, whatever the number of threads (`DELTA_GCODE_THREADS`: 1,
+//! the whole pipeline on one thread; 2, its two lanes; more, helpers of the model stage).
 
 mod common;
 
@@ -36,17 +37,20 @@ fn reports_and_traces_do_not_depend_on_the_thread_count() {
     ];
     let one = run_with_threads("1", &check);
     assert!(one.len() > 100_000, "{} bytes", one.len());
+    assert_eq!(one, run_with_threads("2", &check));
     assert_eq!(one, run_with_threads("4", &check));
     let trace = ["trace", &cube, "-m", &machine, "-o", "-"];
     let one = run_with_threads("1", &trace);
     assert!(one.len() > 1_000_000, "{} bytes", one.len());
+    assert_eq!(one, run_with_threads("2", &trace));
     assert_eq!(one, run_with_threads("4", &trace));
 }
 
 #[test]
 fn a_shaped_check_does_not_depend_on_the_thread_count() {
-    // With an input shaper the sequential stage is the larger one (docs/performance.md);
-    // the batches it hands on, recycled between the stages, carry the same pieces.
+    // With an input shaper the firmware is the larger stage, and the drive stage runs on
+    // the model's lane (docs/architecture.md); the batches, recycled between the stages,
+    // carry the same pieces.
     let dir = tempfile::tempdir().expect("temp dir");
     let profile = dir.path().join("kossel-shaper.yaml");
     let base = std::fs::read_to_string(repo("machines/kossel.yaml")).expect("profile");
@@ -71,5 +75,6 @@ fn a_shaped_check_does_not_depend_on_the_thread_count() {
     ];
     let one = run_with_threads("1", &check);
     assert!(one.len() > 100_000, "{} bytes", one.len());
+    assert_eq!(one, run_with_threads("2", &check));
     assert_eq!(one, run_with_threads("3", &check));
 }

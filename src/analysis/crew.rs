@@ -1,5 +1,6 @@
-//! The model stage's threads: the stage's own thread and a few helpers share each batch's
-//! chunks, claimed one at a time, and the helpers sleep between batches.
+//! The model stage's threads: the lane checking a batch, the other lane when it is free
+//! (`lanes`, [`Crew::claim`]) and, on more than two cores, a few helpers share each batch's
+//! chunks, claimed one at a time; the helpers sleep between batches.
 //!
 //! Not rayon's pool: its idle workers wait for work by yielding the processor in a loop
 //! (`sched_yield`, 32 rounds before they sleep), and on a machine whose cores the
@@ -36,8 +37,16 @@ impl<J: Sync> Crew<J> {
 
     /// Does the parts `0..parts` of `job`, `work(&job, part)` once each, on this thread
     /// and, if `help`, the helpers ([`Self::help`]) that are free, and gives the job back
-    /// when every part is done.
-    pub fn run(&self, job: J, parts: usize, help: bool, work: &impl Fn(&J, usize)) -> J {
+    /// when every part is done. `posted` is called once the job can be claimed
+    /// ([`Self::claim`]) from other threads.
+    pub fn run(
+        &self,
+        job: J,
+        parts: usize,
+        help: bool,
+        work: &impl Fn(&J, usize),
+        posted: impl FnOnce(),
+    ) -> J {
         {
             let mut slot = self.job.write().unwrap_or_else(PoisonError::into_inner);
             *slot = Some(job);
@@ -48,6 +57,7 @@ impl<J: Sync> Crew<J> {
             self.bell.lock().unwrap_or_else(PoisonError::into_inner).0 += 1;
             self.rung.notify_all();
         }
+        posted();
         self.claim(work);
         let mut slot = self.job.write().unwrap_or_else(PoisonError::into_inner);
         slot.take()
@@ -78,9 +88,15 @@ impl<J: Sync> Crew<J> {
         self.rung.notify_all();
     }
 
-    /// Does parts of the job in hand, if any, until none is left to claim.
-    fn claim(&self, work: &impl Fn(&J, usize)) {
+    /// Does parts of the job in hand, if any, until none is left to claim; whether it did
+    /// any.
+    pub fn claim(&self, work: &impl Fn(&J, usize)) -> bool {
+        // Without the lock when every part is taken: the lanes ask whenever they are free.
+        if self.next.load(Ordering::Relaxed) >= self.parts.load(Ordering::Relaxed) {
+            return false;
+        }
         let slot = self.job.read().unwrap_or_else(PoisonError::into_inner);
+        let mut did = false;
         if let Some(job) = slot.as_ref() {
             let parts = self.parts.load(Ordering::Relaxed);
             loop {
@@ -89,8 +105,10 @@ impl<J: Sync> Crew<J> {
                     break;
                 }
                 work(job, part);
+                did = true;
             }
         }
+        did
     }
 }
 
@@ -140,7 +158,7 @@ mod tests {
                     runner: std::thread::current().id(),
                     help,
                 };
-                let job = crew.run(job, parts, help, &work);
+                let job = crew.run(job, parts, help, &work, || {});
                 for (i, d) in job.done.iter().enumerate() {
                     assert_eq!(d.load(Ordering::SeqCst), 1, "part {i} of {parts}");
                 }

@@ -7,7 +7,7 @@ use std::collections::{BTreeSet, HashMap};
 use std::fs::File;
 use std::io::{self, BufRead, BufReader, Read};
 use std::path::Path;
-use std::sync::{Mutex, PoisonError, mpsc};
+use std::sync::{Mutex, PoisonError};
 
 use anyhow::Context;
 use indicatif::ProgressBar;
@@ -15,12 +15,13 @@ use indicatif::ProgressBar;
 use crate::firmware;
 use crate::gcode::{self, Diagnostic, Event, ReadStats};
 use crate::machine::{Firmware, Machine};
-use crate::motion::Segment;
 use crate::path::Vec3;
 use crate::report::{DiagnosticLog, MoveStats, Report};
 use crew::Crew;
+use lanes::{Drive, Lanes, Model, STEP_PIECES, Steps};
 
 mod crew;
+mod lanes;
 mod move_check;
 mod observe;
 mod sequence;
@@ -37,11 +38,12 @@ const PROGRESS_EVERY_MOVES: u64 = 4096;
 /// Pieces of the actual motion handed to the parallel stage at a time.
 const BATCH: usize = 8192;
 
-/// A batch of fewer chunks than this is checked by the model stage's own thread alone.
-/// Marlin's batches hold a few hundred moves of ~40 pieces (1–5 chunks; Klipper's 11–14 with
-/// an input shaper, 44–49 without): the model stage's work is then well below the firmware
-/// thread's, which bounds the run, and a helper woken for each batch took that thread's
-/// core (the bunny with the Q5 profile: 4.12 → 3.68 s, docs/performance.md).
+/// A batch of fewer chunks than this wakes no helper thread (on more than two cores; the
+/// other lane takes chunks whenever it is free). Marlin's batches hold a few hundred moves
+/// of ~40 pieces (1–5 chunks; Klipper's 11–14 with an input shaper, 44–49 without): the
+/// model stage's work is then well below the firmware's, which bounds the run, and a helper
+/// woken for each batch took the firmware's core (the bunny with the Q5 profile: 4.12 →
+/// 3.68 s, docs/performance.md).
 const HELP_MIN_CHUNKS: usize = 8;
 
 /// Consecutive moves checked as one part of a batch (their samples share the model's blocks).
@@ -65,17 +67,15 @@ pub struct RunTotals {
     pub print_time_s: f64,
 }
 
-/// Batches in flight between the sequential stages and the sampling: bounds the memory.
-const BATCHES_IN_FLIGHT: usize = 2;
-
 /// Runs the pipeline over `input`. `on_move` gets every G-code line's result in file order
 /// (the verdict's statistics and what `observer` kept), `on_diag` every diagnostic of the
 /// reader.
 ///
-/// The reader, interpreter and firmware run on this thread, the drive on another; the
-/// sampling, the model and the observers on a third, fed batches of pieces through a
-/// bounded channel, each batch's chunks shared with its helpers ([`THREADS_ENV`]). So the
-/// sequential stages overlap the parallel one, and memory stays bounded.
+/// The reader, interpreter and firmware run on this thread; the drive stage and the
+/// sampling, the model and the observers on whichever of this thread and one other has
+/// room (`lanes`), each batch's chunks shared between them and any further helpers
+/// ([`THREADS_ENV`]). So the sequential stages overlap the parallel one, and memory stays
+/// bounded.
 pub fn run<R: Read, O: Observer>(
     input: R,
     machine: &Machine,
@@ -100,12 +100,23 @@ pub fn run_edited<R: Read, O: Observer>(
     machine: &Machine,
     observer: O,
     edit: &mut impl FnMut(Event, &mut dyn FnMut(Event)),
-    mut on_move: impl FnMut(MoveResult<O::PerMove>) + Send,
+    on_move: impl FnMut(MoveResult<O::PerMove>) + Send,
     on_diag: impl FnMut(Diagnostic),
 ) -> io::Result<RunTotals> {
-    let (to_model, batches) = mpsc::sync_channel::<Batch>(BATCHES_IN_FLIGHT);
-    // The batches done with go back to be filled again.
-    let (give_back, spares) = mpsc::channel::<Batch>();
+    run_on(input, machine, observer, edit, on_move, on_diag, threads())
+}
+
+/// [`run_edited`] on `threads` threads (at least this one): the firmware lane here, the
+/// model lane on a second, crew helpers on the rest (`lanes`).
+fn run_on<R: Read, O: Observer>(
+    input: R,
+    machine: &Machine,
+    observer: O,
+    edit: &mut impl FnMut(Event, &mut dyn FnMut(Event)),
+    on_move: impl FnMut(MoveResult<O::PerMove>) + Send,
+    on_diag: impl FnMut(Diagnostic),
+    threads: usize,
+) -> io::Result<RunTotals> {
     let checker = MoveChecker::new(machine, observer);
     let crew = Crew::new();
     let work = |job: &Job<O::PerMove>, c: usize| {
@@ -116,45 +127,46 @@ pub fn run_edited<R: Read, O: Observer>(
             checker.check_moves(scratch, &job.batch.pieces, &job.batch.moves[run], &mut out);
         });
     };
-    std::thread::scope(|scope| {
-        for _ in 1..model_threads() {
-            scope.spawn(|| crew.help(&work));
-        }
-        let (checker, crew, work) = (&checker, &crew, &work);
-        let model = scope.spawn(move || {
-            // The helpers go when the stage ends, even by a panic.
-            let _dismiss = Dismiss(crew);
-            let mut stage = ModelStage {
-                checker,
+    let lanes = Lanes::new(
+        Drive {
+            sequencer: Sequencer::new(machine),
+            batch_pieces: BATCH,
+        },
+        Model {
+            stage: ModelStage {
+                checker: &checker,
                 pending: None,
                 outs: Vec::new(),
-            };
-            for batch in batches {
-                let batch = stage.process(crew, work, batch, &mut on_move);
-                let _ = give_back.send(batch);
-            }
-            if let Some(last) = stage.pending.take() {
-                on_move(last);
-            }
-        });
-        // A send fails only when the model stage has stopped, and then its panic is
-        // re-raised by the join below.
-        let totals = sequence_edited(
+            },
+            on_move,
+        },
+        &crew,
+        &work,
+    );
+    let read = std::thread::scope(|scope| {
+        for _ in 2..threads {
+            scope.spawn(|| crew.help(&work));
+        }
+        // The helpers go when the lanes are done, even by a panic.
+        let _dismiss = Dismiss(&crew);
+        if threads >= 2 {
+            scope.spawn(|| lanes.work());
+        }
+        let _guard = lanes.guard();
+        let read = firmware_steps(
             input,
             machine,
-            BATCH,
             edit,
             on_diag,
-            |batch| {
-                let _ = to_model.send(batch);
-            },
-            move || spares.try_recv().ok(),
+            |step, last| lanes.push_step(step, last),
+            || lanes.spare_step(),
         );
-        drop(to_model);
-        if let Err(panic) = model.join() {
-            std::panic::resume_unwind(panic);
-        }
-        totals
+        lanes.work();
+        read
+    });
+    Ok(RunTotals {
+        read: read?,
+        print_time_s: lanes.into_drive().sequencer.commanded_span_s(),
     })
 }
 
@@ -167,7 +179,7 @@ pub fn sequence<R: Read>(
     machine: &Machine,
     batch_pieces: usize,
     on_diag: impl FnMut(Diagnostic),
-    on_batch: impl FnMut(Batch) + Send,
+    on_batch: impl FnMut(Batch),
 ) -> io::Result<RunTotals> {
     sequence_edited(
         input,
@@ -182,102 +194,87 @@ pub fn sequence<R: Read>(
 
 /// [`sequence`], the events edited on their way to the firmware (see [`run_edited`]), each
 /// batch built in an emptied one that `spare` gives back when it has one (the memory of a
-/// run then stays that of a few batches).
+/// run then stays that of a few batches). On this thread.
 fn sequence_edited<R: Read>(
     input: R,
     machine: &Machine,
     batch_pieces: usize,
     edit: &mut impl FnMut(Event, &mut dyn FnMut(Event)),
-    mut on_diag: impl FnMut(Diagnostic),
-    mut on_batch: impl FnMut(Batch) + Send,
-    mut spare: impl FnMut() -> Option<Batch> + Send,
+    on_diag: impl FnMut(Diagnostic),
+    mut on_batch: impl FnMut(Batch),
+    mut spare: impl FnMut() -> Option<Batch>,
 ) -> io::Result<RunTotals> {
-    let geometry = MoveChecker::new(machine, ());
-    let mut firmware = firmware::for_machine(machine);
-    let home = Vec3::new(0.0, 0.0, machine.geometry.home_z_mm);
-    // The reader, interpreter, checks and firmware on this thread; the drive and the
-    // sequencer on another, fed in steps through a bounded channel, the steps' memory
-    // handed back.
-    let (to_drive, steps) = mpsc::sync_channel::<Steps>(STEPS_IN_FLIGHT);
-    let (give_back, used) = mpsc::channel::<Steps>();
-    std::thread::scope(|scope| {
-        let drive = scope.spawn(move || {
-            let mut sequencer = Sequencer::new(machine);
-            for mut step in steps {
-                sequencer.checked(&mut step.checked);
-                for c in &step.commanded {
-                    sequencer.commanded(c);
-                    if sequencer.pending_pieces() >= batch_pieces {
-                        if let Some(b) = spare() {
-                            sequencer.recycle(b);
-                        }
-                        on_batch(sequencer.take_batch(false));
+    let mut sequencer = Sequencer::new(machine);
+    let read = firmware_steps(
+        input,
+        machine,
+        edit,
+        on_diag,
+        |mut step, last| {
+            sequencer.checked(&mut step.checked);
+            for c in &step.commanded {
+                sequencer.commanded(c);
+                if sequencer.pending_pieces() >= batch_pieces {
+                    if let Some(b) = spare() {
+                        sequencer.recycle(b);
                     }
+                    on_batch(sequencer.take_batch(false));
                 }
-                step.commanded.clear();
-                let _ = give_back.send(step);
             }
-            sequencer.finish();
-            on_batch(sequencer.take_batch(true));
-            sequencer.commanded_span_s()
-        });
-        let mut step = Steps::default();
-        let send = |step: &mut Steps| {
-            let next = used.try_recv().unwrap_or_default();
-            // A send fails only when the drive stage has stopped; its panic is re-raised
-            // by the join below.
-            let _ = to_drive.send(std::mem::replace(step, next));
-        };
-        let read = gcode::interpret(
-            input,
-            home,
-            machine.dialect(),
-            |event: Event| {
-                edit(event, &mut |event| {
-                    if let Event::Move(m) = &event {
-                        step.checked.push(checks(&geometry, m));
-                    }
-                    firmware.push(&event, &mut step.commanded);
-                    if step.commanded.len().max(step.checked.len()) >= STEP_PIECES {
-                        send(&mut step);
-                    }
-                })
-            },
-            |d| {
-                if for_firmware(&machine.firmware, &d) {
-                    on_diag(d);
-                }
-            },
-        );
-        firmware.finish(&mut step.commanded);
-        send(&mut step);
-        drop(to_drive);
-        let print_time_s = match drive.join() {
-            Ok(span) => span,
-            Err(panic) => std::panic::resume_unwind(panic),
-        };
-        Ok(RunTotals {
-            read: read?,
-            print_time_s,
-        })
+            if last {
+                sequencer.finish();
+                on_batch(sequencer.take_batch(true));
+            }
+        },
+        Steps::default,
+    );
+    Ok(RunTotals {
+        read: read?,
+        print_time_s: sequencer.commanded_span_s(),
     })
 }
 
-/// The checks and commanded pieces handed from the firmware to the drive stage at a time:
-/// the checks of a step's moves come before its pieces, as each move's checks come before
-/// its own pieces (the planner only delays pieces).
-#[derive(Default)]
-struct Steps {
-    checked: Vec<Checked>,
-    commanded: Vec<Segment>,
+/// The firmware's side of the pipeline: reads and interprets `input`, checks each move's
+/// path and plans the commanded motion, handed on in steps of about [`STEP_PIECES`]
+/// pieces (`on_step(step, last)`, the last one after the end of the input, also on an
+/// error), each filled from `spare()`.
+fn firmware_steps<R: Read>(
+    input: R,
+    machine: &Machine,
+    edit: &mut impl FnMut(Event, &mut dyn FnMut(Event)),
+    mut on_diag: impl FnMut(Diagnostic),
+    mut on_step: impl FnMut(Steps, bool),
+    mut spare: impl FnMut() -> Steps,
+) -> io::Result<ReadStats> {
+    let geometry = MoveChecker::new(machine, ());
+    let mut firmware = firmware::for_machine(machine);
+    let home = Vec3::new(0.0, 0.0, machine.geometry.home_z_mm);
+    let mut step = Steps::default();
+    let read = gcode::interpret(
+        input,
+        home,
+        machine.dialect(),
+        |event: Event| {
+            edit(event, &mut |event| {
+                if let Event::Move(m) = &event {
+                    step.checked.push(checks(&geometry, m));
+                }
+                firmware.push(&event, &mut step.commanded);
+                if step.commanded.len().max(step.checked.len()) >= STEP_PIECES {
+                    on_step(std::mem::replace(&mut step, spare()), false);
+                }
+            })
+        },
+        |d| {
+            if for_firmware(&machine.firmware, &d) {
+                on_diag(d);
+            }
+        },
+    );
+    firmware.finish(&mut step.commanded);
+    on_step(step, true);
+    read
 }
-
-/// Commanded pieces, or checks, in a step (see [`Steps`]): the planner's lookahead may hold
-/// thousands of moves' checks before their pieces come.
-const STEP_PIECES: usize = 1024;
-
-/// Steps in flight between the firmware and the drive stage: bounds the memory.
-const STEPS_IN_FLIGHT: usize = 4;
 
 /// Whether a diagnostic of the reader holds for the profile's firmware: the one place
 /// where the reader's words, written for Klipper, are sorted by firmware. Marlin honours
@@ -321,12 +318,13 @@ impl<J: Sync> Drop for Dismiss<'_, J> {
     }
 }
 
-/// The environment variable that sets how many threads sample the moves (the model
-/// stage's own and its helpers): a positive number; unset or anything else, one per core.
+/// The environment variable that sets how many threads a file's pipeline runs on (its two
+/// lanes, then helpers of the model stage): a positive number; unset or anything else, one
+/// per core. With 1 the whole pipeline runs on one thread.
 pub const THREADS_ENV: &str = "DELTA_GCODE_THREADS";
 
-/// The threads of the model stage ([`THREADS_ENV`]).
-fn model_threads() -> usize {
+/// The threads of a file's pipeline ([`THREADS_ENV`]).
+fn threads() -> usize {
     std::env::var(THREADS_ENV)
         .ok()
         .and_then(|v| v.trim().parse::<usize>().ok())
@@ -337,13 +335,14 @@ fn model_threads() -> usize {
 impl<O: Observer> ModelStage<'_, '_, O> {
     /// Samples a batch's moves over the crew, a chunk of moves at a time, and hands on
     /// their results in order, the parts of a line split between batches joined; gives
-    /// the batch back.
+    /// the batch back. `posted` is called once other threads can claim its chunks.
     fn process(
         &mut self,
         crew: &Crew<Job<O::PerMove>>,
         work: &impl Fn(&Job<O::PerMove>, usize),
         batch: Batch,
         on_move: &mut impl FnMut(MoveResult<O::PerMove>),
+        posted: impl FnOnce(),
     ) -> Batch {
         let count = batch.moves.len().div_ceil(CHUNK);
         let mut outs = std::mem::take(&mut self.outs);
@@ -351,7 +350,7 @@ impl<O: Observer> ModelStage<'_, '_, O> {
             outs.resize_with(count, Mutex::default);
         }
         let help = count >= HELP_MIN_CHUNKS;
-        let Job { batch, mut outs } = crew.run(Job { batch, outs }, count, help, work);
+        let Job { batch, mut outs } = crew.run(Job { batch, outs }, count, help, work, posted);
         let results = &mut outs[..count];
         let checker = self.checker;
         // A line is split between batches only at their boundary: the batch's first
