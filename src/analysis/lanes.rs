@@ -267,16 +267,12 @@ where
             batch_pieces,
         } = &mut *drive;
         sequencer.checked(&mut step.checked);
-        for c in &step.commanded {
-            sequencer.commanded(c);
-            if sequencer.pending_pieces() >= *batch_pieces {
-                if let Some(b) = self.lock().spare_batches.pop() {
-                    sequencer.recycle(b);
-                }
-                let batch = sequencer.take_batch(false);
-                self.update(|state| state.batches.push_back(batch));
-            }
-        }
+        sequencer.drive(
+            &step.commanded,
+            *batch_pieces,
+            &mut || self.lock().spare_batches.pop(),
+            &mut |batch| self.update(|state| state.batches.push_back(batch)),
+        );
         step.commanded.clear();
         self.update(|state| {
             state.spare_steps.push(step);

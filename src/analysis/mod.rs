@@ -212,15 +212,7 @@ fn sequence_edited<R: Read>(
         on_diag,
         |mut step, last| {
             sequencer.checked(&mut step.checked);
-            for c in &step.commanded {
-                sequencer.commanded(c);
-                if sequencer.pending_pieces() >= batch_pieces {
-                    if let Some(b) = spare() {
-                        sequencer.recycle(b);
-                    }
-                    on_batch(sequencer.take_batch(false));
-                }
-            }
+            sequencer.drive(&step.commanded, batch_pieces, &mut spare, &mut on_batch);
             if last {
                 sequencer.finish();
                 on_batch(sequencer.take_batch(true));
