@@ -154,11 +154,11 @@ impl Sequencer {
     }
 
     /// [`Self::drive_generic`] compiled for AVX2: the drive's lag and the pieces' work
-    /// with three-axis vectors in one register and the C library's NaN-aware `min`
-    /// without branches (−2.4 % of a run's instructions without a shaper, −3.8 % with
-    /// one; docs/performance.md, seventeenth session). The same operations in the same
-    /// order (Rust fuses no multiply-add unasked), so the same batches bit for bit (test
-    /// `the_avx2_drive_stage_builds_the_baseline_batches`).
+    /// with their three-axis vectors in wider registers (−2.4 % of a run's instructions
+    /// without a shaper, −3.7 % with one; docs/performance.md, seventeenth session; it
+    /// was inlined into its lane's loop, compiled for baseline x86-64). The same operations
+    /// in the same order (Rust fuses no multiply-add unasked), so the same batches bit for
+    /// bit (test `the_avx2_drive_stage_builds_the_baseline_batches`).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     fn drive_avx2(
