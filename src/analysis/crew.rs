@@ -127,8 +127,13 @@ mod tests {
     }
 
     /// Every part of every job is done once, the helpers do some of them when called (the
-    /// first part of each such job waits for one) and none otherwise, each job comes back,
+    /// first part of each such job of several parts waits for one), each job comes back,
     /// and the helpers go when dismissed.
+    ///
+    /// A helper may also take parts of a job it was not called for, or the one part of a
+    /// job before its runner does: one still on its way from an earlier call, or woken the
+    /// moment the job was posted. Asserting that none did failed under load (and, before
+    /// the dismissal on unwinding, hung the test run: the helpers waited for ever).
     #[test]
     fn each_part_is_done_once_and_the_helpers_help() {
         let crew = Crew::<Tally>::new();
@@ -147,7 +152,16 @@ mod tests {
             }
             job.done[part].fetch_add(1, Ordering::SeqCst);
         };
+        /// Dismisses the helpers however the scope ends: a failed assertion then fails the
+        /// test, and the scope does not wait for helpers that wait for a job.
+        struct Dismiss<'a>(&'a Crew<Tally>);
+        impl Drop for Dismiss<'_> {
+            fn drop(&mut self) {
+                self.0.dismiss();
+            }
+        }
         std::thread::scope(|scope| {
+            let _dismiss = Dismiss(&crew);
             for _ in 0..3 {
                 scope.spawn(|| crew.help(&work));
             }
@@ -162,9 +176,10 @@ mod tests {
                 for (i, d) in job.done.iter().enumerate() {
                     assert_eq!(d.load(Ordering::SeqCst), 1, "part {i} of {parts}");
                 }
-                assert_eq!(job.helped.into_inner(), help && parts > 1, "{parts} parts");
+                if help && parts > 1 {
+                    assert!(job.helped.into_inner(), "{parts} parts");
+                }
             }
-            crew.dismiss();
         });
     }
 }

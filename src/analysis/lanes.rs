@@ -397,16 +397,18 @@ mod tests {
     }
 
     /// The run's peaks over every line's statistics, the samples counted, and the lines
-    /// flagged: what a report shows without the list of moves.
+    /// flagged: what a report shows without the list of moves. (Not the carriages' peak
+    /// speed: a report does not show it, and against the run's peaks a move let go whole
+    /// adds none, so it depends on which moves the floor let go when. Compared, it failed
+    /// once in 40 runs under load.)
     fn peaks(results: &[(u64, MoveStats)]) -> (Vec<f64>, u64, Vec<u64>) {
-        let mut peaks = vec![0.0; 10];
+        let mut peaks = vec![0.0; 9];
         for (_, s) in results {
             for i in 0..3 {
                 peaks[i] = s.peak_force_n[i].max(peaks[i]);
                 peaks[3 + i] = s.peak_tension_n[i].max(peaks[3 + i]);
                 peaks[6 + i] = s.worst[i].ratio.max(peaks[6 + i]);
             }
-            peaks[9] = s.peak_speed_mm_s.max(peaks[9]);
         }
         let samples = results.iter().map(|(_, s)| s.samples).sum();
         let flagged = results
