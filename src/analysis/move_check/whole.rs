@@ -23,6 +23,15 @@ const SWING_FIRST_PIECES: usize = 4;
 /// always took 100.7 k (docs/performance.md).
 const WHOLE_GROUP: (usize, usize) = (1, 8);
 
+/// What the halving of kept groups works on ([`MoveChecker::let_go_group`]): the moves'
+/// boxes, their decisions marked in place, the batch's pieces and lines, the run's peaks.
+struct Offers<'a> {
+    whole: &'a mut [Option<WholeMove>],
+    pieces: &'a [PieceWork],
+    moves: &'a [MoveWork],
+    run: &'a Floor,
+}
+
 /// A move offered whole to the run's peaks: the box of all its samples, how many, the fit
 /// of its accelerations, and whether a bound let it go.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -51,7 +60,7 @@ impl<O: Observer> MoveChecker<'_, O> {
             // SAFETY: the CPU has AVX2, checked just above.
             return unsafe { self.let_go_whole_avx2(scratch, pieces, moves, run) };
         }
-        self.let_go_whole_generic(scratch, pieces, moves, run)
+        self.let_go_whole_generic::<false>(scratch, pieces, moves, run)
     }
 
     /// [`Self::let_go_whole_generic`] compiled for AVX2: the boxes' three-axis sums in one
@@ -67,12 +76,13 @@ impl<O: Observer> MoveChecker<'_, O> {
         moves: &[MoveWork],
         run: &Floor,
     ) {
-        self.let_go_whole_generic(scratch, pieces, moves, run)
+        self.let_go_whole_generic::<true>(scratch, pieces, moves, run)
     }
 
-    /// [`Self::let_go_whole`] for any x86-64.
+    /// [`Self::let_go_whole`] for any x86-64; `AVX2` where it is inlined into its AVX2
+    /// copy, whose halving of kept groups is then compiled for AVX2 too.
     #[inline(always)]
-    fn let_go_whole_generic(
+    fn let_go_whole_generic<const AVX2: bool>(
         &self,
         scratch: &mut Scratch,
         pieces: &[PieceWork],
@@ -94,9 +104,15 @@ impl<O: Observer> MoveChecker<'_, O> {
         let (fewest, most) = WHOLE_GROUP;
         let mut size = most;
         let mut rest = &offered[..];
+        let mut offers = Offers {
+            whole: &mut whole,
+            pieces,
+            moves,
+            run,
+        };
         while !rest.is_empty() {
             let (group, after) = rest.split_at(size.min(rest.len()));
-            size = if self.let_go_group(&mut whole, group, pieces, moves, run) {
+            size = if self.let_go_group::<AVX2>(&mut offers, group) {
                 (2 * size).min(most)
             } else {
                 (size / 2).max(fewest)
@@ -107,23 +123,69 @@ impl<O: Observer> MoveChecker<'_, O> {
         scratch.offered = offered;
     }
 
-    /// Offers the joined boxes of the moves `group` (indices in `whole`) to one bound; if
-    /// it keeps them, each half of the group, down to single moves, which get the swing's
-    /// box as a second chance when theirs was the envelope's. Whether the first bound let
-    /// the whole group go.
-    fn let_go_group(
-        &self,
-        whole: &mut [Option<WholeMove>],
-        group: &[usize],
-        pieces: &[PieceWork],
-        moves: &[MoveWork],
-        run: &Floor,
-    ) -> bool {
+    /// Offers the joined boxes of the moves `group` (indices in `offers.whole`) to one
+    /// bound; if it keeps them, each half of the group, down to single moves, which get
+    /// the swing's box as a second chance when theirs was the envelope's. Whether the first
+    /// bound let the whole group go. With `AVX2` (only where the CPU has it), by
+    /// [`Self::halve_avx2`]: a recursion is not inlined into its caller, and so was
+    /// compiled for the baseline (−0.8 % of a run's instructions; docs/performance.md,
+    /// seventeenth session).
+    #[inline(always)]
+    fn let_go_group<const AVX2: bool>(&self, offers: &mut Offers, group: &[usize]) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if AVX2 {
+            // SAFETY: AVX2 is set only in `let_go_whole_avx2` and below it, which run
+            // only on a CPU with it.
+            return unsafe { self.halve_avx2(offers, group) };
+        }
+        self.halve(offers, group)
+    }
+
+    /// [`Self::let_go_group`] for any x86-64. Out of line, as its AVX2 copy: LLVM inlined
+    /// the AVX2 copy's first call into the whole-move pass, 1.8 % more instructions.
+    #[inline(never)]
+    fn halve(&self, offers: &mut Offers, group: &[usize]) -> bool {
+        self.halving::<false>(offers, group)
+    }
+
+    /// [`Self::let_go_group`] compiled for AVX2.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    #[inline(never)]
+    fn halve_avx2(&self, offers: &mut Offers, group: &[usize]) -> bool {
+        self.halving::<true>(offers, group)
+    }
+
+    /// The body of [`Self::halve`] and [`Self::halve_avx2`]: the group offered, and if it
+    /// is kept, each half in turn.
+    #[inline(always)]
+    fn halving<const AVX2: bool>(&self, offers: &mut Offers, group: &[usize]) -> bool {
+        if let Some(went) = self.offer_group(offers, group) {
+            return went;
+        }
+        let (a, b) = group.split_at(group.len() / 2);
+        self.let_go_group::<AVX2>(offers, a);
+        self.let_go_group::<AVX2>(offers, b);
+        false
+    }
+
+    /// The joined boxes of the moves `group` offered to one bound: whether it let them go,
+    /// or None for a group of several moves it kept, to be halved. A single move it kept
+    /// gets the swing's box as a second chance when its box was the envelope's (false all
+    /// the same: its group was kept).
+    #[inline(always)]
+    fn offer_group(&self, offers: &mut Offers, group: &[usize]) -> Option<bool> {
+        let Offers {
+            whole,
+            pieces,
+            moves,
+            run,
+        } = offers;
         // Joined in place, over references: each box is 144 bytes, and copying them
         // through `map` and `reduce` called memmove for each.
         let mut boxes = group.iter().filter_map(|&i| whole[i].as_ref());
         let Some(first) = boxes.next() else {
-            return true;
+            return Some(true);
         };
         let mut joined = first.states;
         for w in boxes {
@@ -135,23 +197,19 @@ impl<O: Observer> MoveChecker<'_, O> {
                     w.let_go = true;
                 }
             }
-            return true;
+            return Some(true);
         }
-        if let [i] = *group {
-            let (Some(w), Some(r)) = (&mut whole[i], &self.response) else {
-                return false;
-            };
-            if w.fit == Fit::Envelope {
-                let m = &moves[i];
-                let works = pieces.get(m.first..m.first + m.count).unwrap_or_default();
-                w.let_go = self.below_run(&self.move_states(works, r, Fit::Swing), run);
-            }
-            return false;
+        let [i] = *group else {
+            return None;
+        };
+        if let (Some(w), Some(r)) = (&mut whole[i], &self.response)
+            && w.fit == Fit::Envelope
+        {
+            let m = &moves[i];
+            let works = pieces.get(m.first..m.first + m.count).unwrap_or_default();
+            w.let_go = self.below_run(&self.move_states(works, r, Fit::Swing), run);
         }
-        let (a, b) = group.split_at(group.len() / 2);
-        self.let_go_group(whole, a, pieces, moves, run);
-        self.let_go_group(whole, b, pieces, moves, run);
-        false
+        Some(false)
     }
 
     /// A box of all the samples of a move's pieces, to be offered whole: None when some
@@ -303,9 +361,9 @@ mod tests {
         }
     }
 
-    /// The AVX2 build of the decision gives the baseline's boxes and decisions bit for
-    /// bit, with and without a shaper (run's peaks at 0.9 of the dense ones, so that both
-    /// outcomes occur).
+    /// The AVX2 build of the decision (the boxes and the halving of kept groups) gives the
+    /// baseline's boxes and decisions bit for bit, with and without a shaper (run's peaks
+    /// at 0.9 of the dense ones, so that both outcomes occur).
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn avx2_decides_as_the_baseline() {
@@ -318,7 +376,7 @@ mod tests {
             let checker = MoveChecker::new(&machine, ());
             let mut scratch = Box::<Scratch>::default();
             let run = run_at(&machine, &b, 0.9);
-            checker.let_go_whole_generic(&mut scratch, &b.pieces, &b.moves, &run);
+            checker.let_go_whole_generic::<false>(&mut scratch, &b.pieces, &b.moves, &run);
             let baseline = scratch.whole.clone();
             // SAFETY: the CPU has AVX2, checked above.
             unsafe { checker.let_go_whole_avx2(&mut scratch, &b.pieces, &b.moves, &run) };
