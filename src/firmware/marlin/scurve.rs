@@ -11,11 +11,18 @@
 //! span of the phase can be drawn (the first step runs before it; a deceleration can end
 //! before its phase does).
 
+use arrayvec::ArrayVec;
+
 use super::trapezoid::Ramp;
 use crate::motion::Phase;
 
 /// Pieces on each side of the middle piece.
 pub const SIDE_PIECES: u32 = 8;
+
+/// The most piece boundaries of a phase ([`Bezier::pieces`]): its two ends and the side
+/// pieces' boundaries on either side of the middle.
+const MAX_BOUNDS: usize = 2 * (SIDE_PIECES as usize + 1) + 2;
+
 /// The middle piece spans τ ∈ [½ − h, ½ + h].
 const MIDDLE_HALF_WIDTH: f64 = 0.005;
 /// The Bézier's peak acceleration over the trapezoid's: 30/16.
@@ -82,7 +89,10 @@ impl Bezier {
         let h = MIDDLE_HALF_WIDTH;
         let side = f64::from(SIDE_PIECES);
         let margin = 0.25 * (0.5 - h) / side;
-        let mut bounds = vec![xa];
+        // On the stack: a vector here was allocated, grown and freed for every phase, 4 % of
+        // a Marlin run's time in the allocator (docs/performance.md, eighteenth session).
+        let mut bounds = ArrayVec::<f64, MAX_BOUNDS>::new();
+        bounds.push(xa);
         bounds.extend(
             (0..=SIDE_PIECES)
                 .map(|k| (0.5 - h) * f64::from(k) / side)
