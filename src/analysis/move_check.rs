@@ -4,6 +4,7 @@
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::delta::{BLOCK, DeltaModel, ForceBlock, StateBlock};
+use crate::interval::greater;
 use crate::machine::Machine;
 use crate::motion::Segment;
 use crate::motion::drive::{Drive, Response};
@@ -476,10 +477,10 @@ impl<O: Observer> SampleSink for MoveSink<'_, '_, O> {
                     return false;
                 };
                 (0..3).all(|i| {
-                    b.force_n[i] < stats.peak_force_n[i].max(floor.force_n[i])
-                        && checker.most_share(&b, i) < stats.worst[i].ratio.max(floor.share[i])
-                        && b.tension_n[i] < stats.peak_tension_n[i].max(floor.tension_n[i])
-                        && b.speed_mm_s[i] < stats.peak_speed_mm_s.max(floor.speed_mm_s)
+                    b.force_n[i] < greater(stats.peak_force_n[i], floor.force_n[i])
+                        && checker.most_share(&b, i) < greater(stats.worst[i].ratio, floor.share[i])
+                        && b.tension_n[i] < greater(stats.peak_tension_n[i], floor.tension_n[i])
+                        && b.speed_mm_s[i] < greater(stats.peak_speed_mm_s, floor.speed_mm_s)
                 })
             }
             Reference::Run(run) => checker.bounds_below_run(&b, run),

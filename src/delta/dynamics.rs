@@ -5,6 +5,7 @@ use serde::Serialize;
 
 use super::kinematics::{MIN_RADICAND_MM2, TOP_TOLERANCE_MM, cofactors, dot};
 use super::{DeltaModel, Unreachable};
+use crate::interval::greater;
 use crate::path::Vec3;
 
 const MM: f64 = 1e-3;
@@ -68,9 +69,9 @@ impl DeltaModel {
         let radicand = self.radicands(p);
         // Clamped so that an unreachable lane computes finite garbage, flagged by `ok`.
         let q = [
-            p[2] + radicand[0].max(MIN_RADICAND_MM2).sqrt(),
-            p[2] + radicand[1].max(MIN_RADICAND_MM2).sqrt(),
-            p[2] + radicand[2].max(MIN_RADICAND_MM2).sqrt(),
+            p[2] + greater(radicand[0], MIN_RADICAND_MM2).sqrt(),
+            p[2] + greater(radicand[1], MIN_RADICAND_MM2).sqrt(),
+            p[2] + greater(radicand[2], MIN_RADICAND_MM2).sqrt(),
         ];
         let rows = self.jx_rows(p, q);
         let (cof, det) = cofactors(&rows);

@@ -3,6 +3,7 @@
 //! instead of only listing a violation per move.
 
 use super::Report;
+use crate::interval::{greater, lesser};
 
 /// Where the moves end: their XY extent and how many end outside the print disc.
 #[derive(Clone, Debug, Default)]
@@ -23,8 +24,8 @@ impl Report {
         if f.moves == 0 {
             (f.min_mm, f.max_mm) = (xy, xy);
         }
-        f.min_mm = [f.min_mm[0].min(xy[0]), f.min_mm[1].min(xy[1])];
-        f.max_mm = [f.max_mm[0].max(xy[0]), f.max_mm[1].max(xy[1])];
+        f.min_mm = [lesser(xy[0], f.min_mm[0]), lesser(xy[1], f.min_mm[1])];
+        f.max_mm = [greater(xy[0], f.max_mm[0]), greater(xy[1], f.max_mm[1])];
         f.moves += 1;
         // Squared: `hypot`, a library call guarding against overflow no bed coordinate
         // reaches, was 1.7 % of a run's time.

@@ -18,6 +18,7 @@ use serde::Serialize;
 
 use crate::delta::TOWER_NAMES;
 use crate::gcode::{Diagnostic, Severity};
+use crate::interval::greater;
 use crate::resample::Phase;
 
 /// At most this many violations and diagnostics are kept in detail; all are counted.
@@ -236,7 +237,7 @@ impl Report {
                 s.peak_line[i] = m.line;
                 s.peak_t_s[i] = m.peak_t_s[i];
             }
-            s.peak_tension_n[i] = s.peak_tension_n[i].max(m.peak_tension_n[i]);
+            s.peak_tension_n[i] = greater(m.peak_tension_n[i], s.peak_tension_n[i]);
             if m.worst[i].ratio > s.peak_use[i] {
                 s.peak_use[i] = m.worst[i].ratio;
                 s.peak_use_line[i] = m.line;

@@ -4,6 +4,7 @@
 use serde::Serialize;
 
 use super::ViolationKind;
+use crate::interval::greater;
 use crate::resample::Phase;
 
 /// Why a move cannot be run as planned (besides asking too much force).
@@ -148,7 +149,7 @@ const MIN_AVAILABLE_N: f64 = 1e-3;
 /// is a large finite share, a violation.
 #[inline(always)]
 pub fn share(force_n: f64, available_n: f64) -> f64 {
-    force_n.abs() / available_n.max(MIN_AVAILABLE_N)
+    force_n.abs() / greater(available_n, MIN_AVAILABLE_N)
 }
 
 /// The instant a tower's motor was asked the largest share of what it can give.
@@ -226,7 +227,7 @@ impl MoveStats {
             let (f, avail) = (run.force_n[i], run.available_n[i]);
             self.peak_speed_mm_s = run.speed_mm_s[i]
                 .iter()
-                .fold(self.peak_speed_mm_s, |m, v| m.max(v.abs()));
+                .fold(self.peak_speed_mm_s, |m, v| greater(v.abs(), m));
             for (j, ((&q, &a), &t)) in f.iter().zip(avail).zip(run.tension_n[i]).enumerate() {
                 let up = t > pull;
                 pull = if up { t } else { pull };
@@ -266,7 +267,7 @@ impl MoveStats {
     /// (an earlier peak wins a tie), the most severe problem, the fastest carriage ratio.
     pub fn merge(&mut self, later: &MoveStats) {
         self.samples += later.samples;
-        self.peak_speed_mm_s = self.peak_speed_mm_s.max(later.peak_speed_mm_s);
+        self.peak_speed_mm_s = greater(later.peak_speed_mm_s, self.peak_speed_mm_s);
         for i in 0..3 {
             if later.peak_force_n[i] > self.peak_force_n[i] {
                 self.peak_force_n[i] = later.peak_force_n[i];
@@ -407,7 +408,7 @@ mod tests {
                         scan.peak_t_s[i] = t[k];
                         scan.peak_phase[i] = phase[k];
                     }
-                    scan.peak_speed_mm_s = scan.peak_speed_mm_s.max(v[i][k].abs());
+                    scan.peak_speed_mm_s = greater(v[i][k].abs(), scan.peak_speed_mm_s);
                     if pull[i][k] > scan.peak_tension_n[i] {
                         scan.peak_tension_n[i] = pull[i][k];
                         scan.peak_tension_t_s[i] = t[k];

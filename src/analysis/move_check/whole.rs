@@ -6,6 +6,7 @@ use super::{Floor, MoveChecker, Scratch};
 use crate::analysis::observe::Observer;
 use crate::analysis::sequence::MoveWork;
 use crate::delta::ForceBounds;
+use crate::interval::lesser;
 use crate::motion::drive::Response;
 use crate::report::share;
 use crate::resample::{Fit, PieceWork, SPARSE_MIN_SAMPLES, StateBox, move_samples, piece_raw};
@@ -270,8 +271,8 @@ impl<O: Observer> MoveChecker<'_, O> {
     pub(super) fn bounds_below_run(&self, b: &ForceBounds, run: &Floor) -> bool {
         (0..3).all(|i| {
             b.force_n[i] < run.force_n[i]
-                && self.most_share(b, i) < run.share[i].min(1.0)
-                && b.tension_n[i] < run.tension_n[i].min(self.hold_n)
+                && self.most_share(b, i) < lesser(run.share[i], 1.0)
+                && b.tension_n[i] < lesser(run.tension_n[i], self.hold_n)
         })
     }
 

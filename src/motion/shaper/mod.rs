@@ -185,7 +185,7 @@ impl Shaper {
     fn emit_until(&mut self, t_end: f64, out: &mut impl FnMut(Segment)) {
         while self.t_out < t_end {
             let ta = self.t_out;
-            let tb = self.next_break(ta).min(t_end);
+            let tb = lesser(self.next_break(ta), t_end);
             if tb - ta > MIN_PIECE_S {
                 out(self.piece(ta, tb));
             }

@@ -4,6 +4,7 @@
 //! (klippy/kinematics/extruder.py).
 
 use crate::gcode::{LimitChange, Move};
+use crate::interval::lesser;
 use crate::machine::Machine;
 use crate::machine::defaults::SLOW_RATIO;
 
@@ -121,7 +122,11 @@ impl MoveLimits {
         }
         let kinematic = path_d >= MIN_KINEMATIC_D_MM;
         let (move_d, velocity, accel) = if kinematic {
-            (path_d, speed.min(t.max_velocity_mm_s), t.max_accel_mm_s2)
+            (
+                path_d,
+                lesser(speed, t.max_velocity_mm_s),
+                t.max_accel_mm_s2,
+            )
         } else {
             // An extrude-only move: the extruder's limits below cap it.
             (m.e_mm.abs(), speed, EXTRUDE_ONLY_ACCEL_MM_S2)

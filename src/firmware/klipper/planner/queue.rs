@@ -7,6 +7,9 @@
 use std::collections::VecDeque;
 
 use crate::gcode::Move;
+// The squared speeds are never NaN: plain comparisons, not `f64::min`'s NaN handling (1.1 %
+// of a run's instructions, docs/performance.md, eighteenth session).
+use crate::interval::{greater, lesser};
 use crate::path::{Path, Vec3};
 
 use super::PlannedMove;
@@ -81,9 +84,9 @@ impl QueuedMove {
             self.max_cruise_v2 = v2;
             self.min_move_t_s = self.move_d_mm / speed_mm_s;
         }
-        self.accel_mm_s2 = self.accel_mm_s2.min(accel_mm_s2);
+        self.accel_mm_s2 = lesser(self.accel_mm_s2, accel_mm_s2);
         self.delta_v2 = 2.0 * self.move_d_mm * self.accel_mm_s2;
-        self.mcr_delta_v2 = self.mcr_delta_v2.min(self.delta_v2);
+        self.mcr_delta_v2 = lesser(self.mcr_delta_v2, self.delta_v2);
     }
 
     /// toolhead.py `Move.calc_junction`. `icv` is the extruder's
@@ -106,13 +109,13 @@ impl QueuedMove {
         } else {
             self.max_cruise_v2
         };
-        let mut cap = extruder_v2.min(self.max_cruise_v2).min(prev.max_cruise_v2);
+        let mut cap = lesser(lesser(extruder_v2, self.max_cruise_v2), prev.max_cruise_v2);
         // The "approximated centripetal velocity" of a virtual arc of deviation
         // junction_deviation tangent to both moves; θ is the angle between the reversed
         // incoming direction and the outgoing one (π for a straight continuation).
         let cos_theta = -prev.path.dir().dot(&self.path.dir());
-        let sin_half = (0.5 * (1.0 - cos_theta)).max(0.0).sqrt();
-        let cos_half = (0.5 * (1.0 + cos_theta)).max(0.0).sqrt();
+        let sin_half = greater(0.5 * (1.0 - cos_theta), 0.0).sqrt();
+        let cos_half = greater(0.5 * (1.0 + cos_theta), 0.0).sqrt();
         let one_minus_sin_half = 1.0 - sin_half;
         if one_minus_sin_half > 0.0 && cos_half > 0.0 {
             let r_jd = sin_half / one_minus_sin_half;
@@ -123,11 +126,10 @@ impl QueuedMove {
             let quarter_tan_half = 0.25 * sin_half / cos_half;
             let move_c_v2 = self.delta_v2 * quarter_tan_half;
             let prev_c_v2 = prev.delta_v2 * quarter_tan_half;
-            cap = cap
-                .min(move_jd_v2)
-                .min(prev_jd_v2)
-                .min(move_c_v2)
-                .min(prev_c_v2);
+            cap = lesser(
+                lesser(lesser(lesser(cap, move_jd_v2), prev_jd_v2), move_c_v2),
+                prev_c_v2,
+            );
         }
         cap
     }
@@ -135,10 +137,9 @@ impl QueuedMove {
     /// The acceleration chains: no faster at the start than the previous move could reach
     /// (at full accel, and at the minimum_cruise_ratio pseudo-accel).
     fn chain(&mut self, prev: &QueuedMove) {
-        self.max_start_v2 = self.junction_cap_v2.min(prev.max_start_v2 + prev.delta_v2);
-        self.max_mcr_start_v2 = self
-            .max_start_v2
-            .min(prev.max_mcr_start_v2 + prev.mcr_delta_v2);
+        self.max_start_v2 = lesser(self.junction_cap_v2, prev.max_start_v2 + prev.delta_v2);
+        self.max_mcr_start_v2 =
+            lesser(self.max_start_v2, prev.max_mcr_start_v2 + prev.mcr_delta_v2);
     }
 
     /// toolhead.py `Move.set_junction`: the trapezoid through the three squared speeds.
@@ -147,7 +148,7 @@ impl QueuedMove {
         let accel_d = (cruise_v2 - start_v2) * half_inv_accel;
         let decel_d = (cruise_v2 - end_v2) * half_inv_accel;
         // Rounding can leave a cruise of -1e-15 mm; a time is never negative.
-        let cruise_d = (self.move_d_mm - accel_d - decel_d).max(0.0);
+        let cruise_d = greater(self.move_d_mm - accel_d - decel_d, 0.0);
         let (start_v, cruise_v, end_v) = (start_v2.sqrt(), cruise_v2.sqrt(), end_v2.sqrt());
         PlannedMove {
             line: self.line,
@@ -271,9 +272,9 @@ impl Lookahead {
         for i in (0..n).rev() {
             let m = &self.queue[i];
             let reachable_start_v2 = next_start_v2 + m.delta_v2;
-            let start_v2 = m.max_start_v2.min(reachable_start_v2);
+            let start_v2 = lesser(m.max_start_v2, reachable_start_v2);
             let reach_mcr_start_v2 = next_mcr_start_v2 + m.mcr_delta_v2;
-            let mcr_start_v2 = m.max_mcr_start_v2.min(reach_mcr_start_v2);
+            let mcr_start_v2 = lesser(m.max_mcr_start_v2, reach_mcr_start_v2);
             pending += 1;
             let mut cruise_v2 = None;
             if mcr_start_v2 < reach_mcr_start_v2 {
@@ -287,11 +288,10 @@ impl Lookahead {
                     }
                     peak_cruise_v2 = (mcr_start_v2 + reach_mcr_start_v2) * 0.5;
                 }
-                cruise_v2 = Some(
-                    ((start_v2 + reachable_start_v2) * 0.5)
-                        .min(m.max_cruise_v2)
-                        .min(peak_cruise_v2),
-                );
+                cruise_v2 = Some(lesser(
+                    lesser((start_v2 + reachable_start_v2) * 0.5, m.max_cruise_v2),
+                    peak_cruise_v2,
+                ));
                 pending = 0;
                 boundary_final = m.max_start_v2 <= reachable_start_v2;
             }
@@ -321,10 +321,10 @@ impl Lookahead {
         let mut prev_cruise_v2 = self.last_cruise_v2;
         let mut end_v2 = 0.0;
         for (m, j) in self.queue.iter().zip(&self.junctions).take(count) {
-            let cruise_v2 = j.cruise_v2.unwrap_or(prev_cruise_v2.min(j.start_v2));
-            end_v2 = j.next_start_v2.min(cruise_v2);
+            let cruise_v2 = j.cruise_v2.unwrap_or(lesser(prev_cruise_v2, j.start_v2));
+            end_v2 = lesser(j.next_start_v2, cruise_v2);
             let p = m.planned(
-                j.start_v2.min(cruise_v2),
+                lesser(j.start_v2, cruise_v2),
                 cruise_v2,
                 end_v2,
                 self.print_time_s,
@@ -349,8 +349,8 @@ impl Lookahead {
         let Some(first) = self.queue.front_mut() else {
             return;
         };
-        first.max_start_v2 = first.max_start_v2.min(end_v2);
-        first.max_mcr_start_v2 = first.max_mcr_start_v2.min(end_v2);
+        first.max_start_v2 = lesser(first.max_start_v2, end_v2);
+        first.max_mcr_start_v2 = lesser(first.max_mcr_start_v2, end_v2);
         for i in 1..self.queue.len() {
             let prev = self.queue[i - 1];
             self.queue[i].chain(&prev);
