@@ -199,7 +199,15 @@ mod tests {
     /// second operand when the first is NaN (the order their callers rely on).
     #[test]
     fn lesser_and_greater_are_min_and_max_and_drop_a_first_nan() {
-        let values = [-3.5, -0.0, 0.0, 1e-300, 2.0, f64::INFINITY, f64::NEG_INFINITY];
+        let values = [
+            -3.5,
+            -0.0,
+            0.0,
+            1e-300,
+            2.0,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        ];
         for a in values {
             for b in values {
                 assert_eq!(lesser(a, b), a.min(b), "{a} {b}");

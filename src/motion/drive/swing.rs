@@ -123,10 +123,13 @@ impl Response {
         // Windows [k·step, (k + 1)·step], the last one ending at the piece's end, unless the
         // piece outlasts them all (then the envelope from there on).
         let tail = dt_s > WINDOWS as f64 * step_s;
+        // ⌊dt/step⌋ + 1, at most WINDOWS, by comparisons: a float's saturating conversion to
+        // `usize` is a dozen instructions on x86-64 (the same n for every dt, NaN included).
+        let x = dt_s / step_s;
         let n = if tail {
             WINDOWS
         } else {
-            ((dt_s / step_s) as usize + 1).min(WINDOWS)
+            1 + (1..WINDOWS).filter(|&k| x >= k as f64).count()
         };
         let full = curve(self, *step_s);
         let last = if tail {

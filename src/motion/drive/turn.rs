@@ -59,15 +59,18 @@ pub fn sin_cos(x: f64) -> (f64, f64) {
     if x.is_nan() || x.abs() > MAX_REDUCED {
         return x.sin_cos();
     }
-    // x = k·π/2 + r, |r| ≤ π/4 (and a rounding).
-    let k = (x * FRAC_2_PI + ROUND) - ROUND;
+    // x = k·π/2 + r, |r| ≤ π/4 (and a rounding). The sum's last bits are k's (|k| < 2^20,
+    // the sum 1.5·2^52 + k), which a saturating float conversion would take six
+    // instructions to give.
+    let shifted = x * FRAC_2_PI + ROUND;
+    let k = shifted - ROUND;
     let r = ((x - k * PIO2_1) - k * PIO2_2) - k * PIO2_3;
     let z = r * r;
     let s = r + r * z * horner(&SIN, z);
     let c = 1.0 - 0.5 * z + z * z * horner(&COS, z);
     // The quadrant: sin and cos of r turned by k quarter turns, swapped when k is odd, each
     // sign set by a bit (no branch: the quadrants come at random).
-    let q = k as i64 as u64;
+    let q = shifted.to_bits();
     let (s, c) = if q & 1 == 1 { (c, s) } else { (s, c) };
     (
         f64::from_bits(s.to_bits() ^ ((q & 2) << 62)),
