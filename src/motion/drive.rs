@@ -13,6 +13,8 @@
 mod swing;
 mod turn;
 
+pub(crate) use turn::ROUND;
+
 use super::{CONTINUITY_MM, Segment};
 use crate::path::Vec3;
 use swing::Windows;

@@ -21,7 +21,7 @@ const PIO2_3: f64 = 2.022_266_248_795_950_6e-21;
 const MAX_REDUCED: f64 = 1.0e6;
 
 /// 1.5·2^52: a double of magnitude below 2^51 plus this is rounded to an integer.
-const ROUND: f64 = 6_755_399_441_055_744.0;
+pub(crate) const ROUND: f64 = 6_755_399_441_055_744.0;
 
 /// 1/n! for the odd n from 3 to 17 (sin) and the even n from 4 to 18 (cos), alternating in
 /// sign: |r|^19/19! and |r|^20/20! at |r| ≤ π/4 are below 1e-19.
