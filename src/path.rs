@@ -6,6 +6,8 @@
 
 use nalgebra::Vector3;
 
+use crate::interval::{greater, lesser};
+
 /// A position, velocity or acceleration in the bed frame (mm, mm/s, mm/s²).
 pub type Vec3 = Vector3<f64>;
 
@@ -90,12 +92,13 @@ impl Path {
     /// (mm²): the farthest point of a segment is one of its ends.
     pub fn max_dist2_from_mm2(&self, xy: [f64; 2]) -> f64 {
         let d2 = |p: Vec3| (p.x - xy[0]).powi(2) + (p.y - xy[1]).powi(2);
-        d2(self.start).max(d2(self.end))
+        // Plain comparisons: a path is finite (the parser bounds every number).
+        greater(d2(self.start), d2(self.end))
     }
 
     /// Lowest z of the path, mm.
     pub fn min_z_mm(&self) -> f64 {
-        self.start.z.min(self.end.z)
+        lesser(self.start.z, self.end.z)
     }
 }
 
