@@ -327,18 +327,24 @@ pub fn piece_samples(work: &PieceWork, period_s: f64) -> u64 {
 /// asked exactly only when its time is within 1e-6 of a period's multiple (the grid's time
 /// `k as f64 * Ts` is within a few units in the last place of k·Ts); other chains go
 /// piece by piece.
-pub fn move_samples(works: &[PieceWork], period_s: f64) -> u64 {
+///
+/// None when a piece lasts longer than `longest_s` (a whole move's box is offered only when
+/// every piece is sampled): asked in the same pass, one loop over the pieces where two
+/// mispredicted their ends on the bunny's moves of one to four pieces.
+pub fn move_samples(works: &[PieceWork], period_s: f64, longest_s: f64) -> Option<u64> {
     let (Some(first), Some(last)) = (works.first(), works.last()) else {
-        return 0;
+        return Some(0);
     };
     let inv = 1.0 / period_s;
+    let mut sampled = true;
     let mut chain = true;
     let mut ends = 0;
     let mut on_grid = 0;
     let mut prev_end = first.commanded.t0_s;
     for w in works {
         let (t0, t1) = (w.commanded.t0_s, w.commanded.t1_s());
-        // Without a branch per piece: the fallback is rare.
+        // Without a branch per piece: the fallback and long pieces are rare.
+        sampled &= w.commanded.dt_s <= longest_s;
         chain &= (t0 == prev_end) & (t1 > t0);
         ends += u64::from(w.end_sample) + change_samples(&w.commanded, period_s);
         let q = t0 * inv;
@@ -351,12 +357,15 @@ pub fn move_samples(works: &[PieceWork], period_s: f64) -> u64 {
         }
         prev_end = t1;
     }
+    if !sampled {
+        return None;
+    }
     if !chain {
-        return piece_by_piece(works, period_s);
+        return Some(piece_by_piece(works, period_s));
     }
     let inside = first_grid_index(last.commanded.t1_s(), period_s)
         - first_inside(first.commanded.t0_s, period_s);
-    works.len() as u64 + ends + inside.max(0) as u64 - on_grid
+    Some(works.len() as u64 + ends + inside.max(0) as u64 - on_grid)
 }
 
 /// How close t/Ts must come to an integer for [`move_samples`] to ask whether t is on the

@@ -221,14 +221,8 @@ impl<O: Observer> MoveChecker<'_, O> {
     fn whole_box(&self, works: &[PieceWork]) -> Option<WholeMove> {
         let r = self.response.as_ref()?;
         let period_s = self.machine.sampling.period_s;
-        // Whether every piece is sampled, without a branch per piece.
-        let sampled = works.iter().fold(true, |all, w| {
-            all & (w.commanded.dt_s <= MAX_SAMPLES_PER_PIECE * period_s)
-        });
-        if !sampled {
-            return None;
-        }
-        let count = move_samples(works, period_s);
+        // None unless every piece is sampled.
+        let count = move_samples(works, period_s, MAX_SAMPLES_PER_PIECE * period_s)?;
         if count < SPARSE_MIN_SAMPLES || works.is_empty() {
             return None;
         }

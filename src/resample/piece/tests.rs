@@ -454,7 +454,12 @@ proptest::proptest! {
         }
         let summed: u64 = works.iter().map(|w| piece_samples(w, TS)).sum();
         let taken: usize = works.iter().map(|w| samples(w, None).len()).sum();
-        proptest::prop_assert_eq!(move_samples(&works, TS), summed);
+        proptest::prop_assert_eq!(move_samples(&works, TS, f64::INFINITY), Some(summed));
+        // A piece longer than allowed: no count.
+        let longest = works.iter().map(|w| w.commanded.dt_s).fold(0.0, f64::max);
+        if longest > 0.0 {
+            proptest::prop_assert_eq!(move_samples(&works, TS, 0.5 * longest), None);
+        }
         proptest::prop_assert_eq!(summed, taken as u64);
     }
 
