@@ -131,12 +131,12 @@ impl Neg for Interval {
 }
 
 /// The smaller of two numbers that are not NaN: one instruction, where `f64::min` spends
-/// four on NaN (every operation here uses it, and the planner, the reports' peaks and the
-/// sampled moves' shares: 1.9 % of a run's instructions, docs/performance.md). With `a`
-/// NaN it gives `b`, as `f64::min` does, so callers put first the operand that could be. Intervals are meant for finite values: a
-/// NaN may be dropped or kept, as `f64::min` may drop it too. The products of finite
-/// intervals are NaN only from 0·∞, which a user of the bounds rules out by refusing huge
-/// or NaN inputs (`delta::bounds`).
+/// four on NaN (every operation here uses it, and so do the planner, the reports' peaks
+/// and the sampled moves' shares: 1.9 % of a run's instructions, docs/performance.md).
+/// With `a` NaN it gives `b`, as `f64::min` does, so callers put first the operand that
+/// could be NaN. Intervals are meant for finite values: a NaN may be dropped or kept, as
+/// `f64::min` may drop it too. The products of finite intervals are NaN only from 0·∞,
+/// which a user of the bounds rules out by refusing huge or NaN inputs (`delta::bounds`).
 #[inline(always)]
 pub(crate) fn lesser(a: f64, b: f64) -> f64 {
     if a < b { a } else { b }
