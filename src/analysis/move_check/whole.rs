@@ -96,7 +96,8 @@ impl<O: Observer> MoveChecker<'_, O> {
         offered.clear();
         for (idx, m) in moves.iter().enumerate() {
             let works = pieces.get(m.first..m.first + m.count).unwrap_or_default();
-            let w = (!m.split).then(|| self.whole_box(works)).flatten();
+            // Not `bool::then`: its closure was left out of line (2.5 % more instructions).
+            let w = if m.split { None } else { self.whole_box(works) };
             if w.is_some() {
                 offered.push(idx);
             }
