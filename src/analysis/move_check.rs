@@ -143,7 +143,7 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
                         if let Some(r) = out.last_mut() {
                             r.stats.samples += w.count;
                         }
-                        self.skipped.fetch_add(w.count, Ordering::Relaxed);
+                        scratch.skipped += w.count;
                         true
                     }
                     _ => {
@@ -173,6 +173,12 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
         }
         revisit.clear();
         scratch.revisit = revisit;
+        // Once a call: an atomic addition per move, on a line both lanes write, cost a
+        // cache line's trip between the cores each time.
+        let skipped = std::mem::take(&mut scratch.skipped);
+        if skipped > 0 {
+            self.skipped.fetch_add(skipped, Ordering::Relaxed);
+        }
         if let Some(floor) = &self.run_floor {
             let whole = moves.iter().zip(&out[base..]).filter(|(m, _)| !m.split);
             for (_, r) in whole {
@@ -491,7 +497,7 @@ impl<O: Observer> SampleSink for MoveSink<'_, '_, O> {
         if below {
             stats.samples += count;
             self.skipped = true;
-            self.checker.skipped.fetch_add(count, Ordering::Relaxed);
+            self.scratch.skipped += count;
         }
         below
     }
@@ -514,6 +520,8 @@ pub struct Scratch {
     /// ([`MoveChecker::let_go_whole`]); the indices of the offered ones.
     whole: Vec<Option<WholeMove>>,
     offered: Vec<usize>,
+    /// Samples left uncomputed in the call so far, for [`MoveChecker::skipped_samples`].
+    skipped: u64,
 }
 
 impl Default for Scratch {
@@ -530,6 +538,7 @@ impl Default for Scratch {
             revisit: Vec::new(),
             whole: Vec::new(),
             offered: Vec::new(),
+            skipped: 0,
         }
     }
 }
