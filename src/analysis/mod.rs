@@ -122,10 +122,15 @@ fn run_on<R: Read, O: Observer>(
     let work = |job: &Job<O::PerMove>, c: usize| {
         let n = job.batch.moves.len();
         let run = c * CHUNK..n.min((c + 1) * CHUNK);
-        let mut out = job.outs[c].lock().unwrap_or_else(PoisonError::into_inner);
+        let mut slot = job.outs[c].lock().unwrap_or_else(PoisonError::into_inner);
+        // Filled out of its slot: the slots of neighbouring chunks share cache lines, and
+        // the two lanes check neighbouring chunks at once, so a vector's length written
+        // in place at every move would move a line between the cores each time.
+        let mut out = std::mem::take(&mut *slot);
         SCRATCH.with_borrow_mut(|scratch| {
             checker.check_moves(scratch, &job.batch.pieces, &job.batch.moves[run], &mut out);
         });
+        *slot = out;
     };
     let lanes = Lanes::new(
         Drive {
