@@ -8,9 +8,10 @@ mod piece;
 
 pub use crate::motion::Phase;
 pub use curve::{Curve, Frame, Lissajous, TaylorStep, taylor_step, walk_constant_speed};
+pub(crate) use piece::piece_raw;
 pub use piece::{
     Edge, Fit, Kicks, PieceWork, RawBox, SPARSE_MIN_SAMPLES, move_samples, peak_candidates,
-    piece_raw, piece_samples, piece_states, sample_piece,
+    piece_samples, piece_states, sample_piece,
 };
 
 use crate::interval::Interval;

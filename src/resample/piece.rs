@@ -429,19 +429,27 @@ pub enum Fit {
 /// A box holding the states of every sample [`sample_piece`] takes of `work` with the drive
 /// `response` (see [`piece_samples`]).
 pub fn piece_states(work: &PieceWork, response: &Response, period_s: f64, fit: Fit) -> StateBox {
-    piece_raw(work, response, period_s, fit).slacked()
+    piece_raw::<false>(work, response, period_s, fit).slacked()
 }
 
 /// [`piece_states`] before its rounding slack: the boxes of a move's pieces are joined so,
 /// and the join slacked once ([`RawBox::slacked`]).
+///
+/// `AVX2` only in code compiled for AVX2, which runs only on a CPU with it (the swing's
+/// lanes, [`Response::acceleration_range`]).
 #[inline(always)]
-pub fn piece_raw(work: &PieceWork, response: &Response, period_s: f64, fit: Fit) -> RawBox {
+pub(crate) fn piece_raw<const AVX2: bool>(
+    work: &PieceWork,
+    response: &Response,
+    period_s: f64,
+    fit: Fit,
+) -> RawBox {
     let grid = Grid {
         work,
         response,
         period_s,
     };
-    grid.raw(0.0, work.commanded.dt_s, fit)
+    grid.raw::<AVX2>(0.0, work.commanded.dt_s, fit)
 }
 
 /// A box of states before the slack for rounding, with the ringing amplitudes the slack
@@ -580,7 +588,7 @@ impl Grid<'_> {
     /// acceleration's swing over it instead ([`Response::acceleration_range`]). Before the
     /// slack for rounding ([`RawBox::slacked`]).
     #[inline(always)]
-    fn raw(&self, ta: f64, tb: f64, fit: Fit) -> RawBox {
+    fn raw<const AVX2: bool>(&self, ta: f64, tb: f64, fit: Fit) -> RawBox {
         let work = self.work;
         let seg = &work.commanded;
         // At 0 the piece's own start (a whole piece's box, where `ta` is the constant 0):
@@ -610,7 +618,7 @@ impl Grid<'_> {
         let acc = match (fit, &work.edge) {
             (Fit::Swing, Edge::End(end)) => self
                 .response
-                .acceleration_range(&work.lag, end, seg.a, seg.dt_s, ring.acc),
+                .acceleration_range::<AVX2>(&work.lag, end, seg.a, seg.dt_s, ring.acc),
             _ => std::array::from_fn(|i| Interval::around(ring.acc_p[i], ring.acc[i])),
         };
         RawBox {
@@ -627,7 +635,7 @@ impl Grid<'_> {
 
     /// [`Self::raw`], slacked.
     fn span(&self, ta: f64, tb: f64, fit: Fit) -> StateBox {
-        self.raw(ta, tb, fit).slacked()
+        self.raw::<false>(ta, tb, fit).slacked()
     }
 }
 

@@ -59,31 +59,44 @@ impl<O: Observer> MoveChecker<'_, O> {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU has AVX2, checked just above.
-            return unsafe { self.let_go_whole_avx2(scratch, pieces, moves, run) };
+            return unsafe {
+                if self.machine.input_shaper.x.is_none() && self.machine.input_shaper.y.is_none() {
+                    self.let_go_whole_avx2::<true>(scratch, pieces, moves, run)
+                } else {
+                    self.let_go_whole_avx2::<false>(scratch, pieces, moves, run)
+                }
+            };
         }
-        self.let_go_whole_generic::<false>(scratch, pieces, moves, run)
+        self.let_go_whole_generic::<false, false>(scratch, pieces, moves, run)
     }
 
     /// [`Self::let_go_whole_generic`] compiled for AVX2: the boxes' three-axis sums in one
     /// register instead of two (−3.7 % instructions of a run, about −2 % CPU time without
     /// a shaper and −5 % with one, docs/performance.md). The same operations in the same
     /// order (Rust fuses no multiply-add unasked), so the same boxes bit for bit.
+    ///
+    /// With `SWING` (chosen without an input shaper), the swing's three axes in one
+    /// register as well ([`Response::acceleration_range`]): −2.6 % of a default run's
+    /// instructions. A shaper's pieces mostly fit one window, where that kernel's call
+    /// costs more than it saves, and its call site alone made the shaped run's pass 1.1 %
+    /// dearer (docs/performance.md, nineteenth session).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
-    fn let_go_whole_avx2(
+    fn let_go_whole_avx2<const SWING: bool>(
         &self,
         scratch: &mut Scratch,
         pieces: &[PieceWork],
         moves: &[MoveWork],
         run: &Floor,
     ) {
-        self.let_go_whole_generic::<true>(scratch, pieces, moves, run)
+        self.let_go_whole_generic::<true, SWING>(scratch, pieces, moves, run)
     }
 
     /// [`Self::let_go_whole`] for any x86-64; `AVX2` where it is inlined into its AVX2
-    /// copy, whose halving of kept groups is then compiled for AVX2 too.
+    /// copy, whose halving of kept groups is then compiled for AVX2 too, and `SWING` (the
+    /// swing's AVX2 lanes) only with `AVX2`.
     #[inline(always)]
-    fn let_go_whole_generic<const AVX2: bool>(
+    fn let_go_whole_generic<const AVX2: bool, const SWING: bool>(
         &self,
         scratch: &mut Scratch,
         pieces: &[PieceWork],
@@ -97,7 +110,11 @@ impl<O: Observer> MoveChecker<'_, O> {
         for (idx, m) in moves.iter().enumerate() {
             let works = pieces.get(m.first..m.first + m.count).unwrap_or_default();
             // Not `bool::then`: its closure was left out of line (2.5 % more instructions).
-            let w = if m.split { None } else { self.whole_box(works) };
+            let w = if m.split {
+                None
+            } else {
+                self.whole_box::<SWING>(works)
+            };
             if w.is_some() {
                 offered.push(idx);
             }
@@ -114,7 +131,7 @@ impl<O: Observer> MoveChecker<'_, O> {
         };
         while !rest.is_empty() {
             let (group, after) = rest.split_at(size.min(rest.len()));
-            size = if self.let_go_group::<AVX2>(&mut offers, group) {
+            size = if self.let_go_group::<AVX2, SWING>(&mut offers, group) {
                 (2 * size).min(most)
             } else {
                 (size / 2).max(fewest)
@@ -133,12 +150,16 @@ impl<O: Observer> MoveChecker<'_, O> {
     /// compiled for the baseline (−0.8 % of a run's instructions; docs/performance.md,
     /// seventeenth session).
     #[inline(always)]
-    fn let_go_group<const AVX2: bool>(&self, offers: &mut Offers, group: &[usize]) -> bool {
+    fn let_go_group<const AVX2: bool, const SWING: bool>(
+        &self,
+        offers: &mut Offers,
+        group: &[usize],
+    ) -> bool {
         #[cfg(target_arch = "x86_64")]
         if AVX2 {
             // SAFETY: AVX2 is set only in `let_go_whole_avx2` and below it, which run
             // only on a CPU with it.
-            return unsafe { self.halve_avx2(offers, group) };
+            return unsafe { self.halve_avx2::<SWING>(offers, group) };
         }
         self.halve(offers, group)
     }
@@ -147,27 +168,31 @@ impl<O: Observer> MoveChecker<'_, O> {
     /// the AVX2 copy's first call into the whole-move pass, 1.8 % more instructions.
     #[inline(never)]
     fn halve(&self, offers: &mut Offers, group: &[usize]) -> bool {
-        self.halving::<false>(offers, group)
+        self.halving::<false, false>(offers, group)
     }
 
     /// [`Self::let_go_group`] compiled for AVX2.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2")]
     #[inline(never)]
-    fn halve_avx2(&self, offers: &mut Offers, group: &[usize]) -> bool {
-        self.halving::<true>(offers, group)
+    fn halve_avx2<const SWING: bool>(&self, offers: &mut Offers, group: &[usize]) -> bool {
+        self.halving::<true, SWING>(offers, group)
     }
 
     /// The body of [`Self::halve`] and [`Self::halve_avx2`]: the group offered, and if it
     /// is kept, each half in turn.
     #[inline(always)]
-    fn halving<const AVX2: bool>(&self, offers: &mut Offers, group: &[usize]) -> bool {
-        if let Some(went) = self.offer_group(offers, group) {
+    fn halving<const AVX2: bool, const SWING: bool>(
+        &self,
+        offers: &mut Offers,
+        group: &[usize],
+    ) -> bool {
+        if let Some(went) = self.offer_group::<SWING>(offers, group) {
             return went;
         }
         let (a, b) = group.split_at(group.len() / 2);
-        self.let_go_group::<AVX2>(offers, a);
-        self.let_go_group::<AVX2>(offers, b);
+        self.let_go_group::<AVX2, SWING>(offers, a);
+        self.let_go_group::<AVX2, SWING>(offers, b);
         false
     }
 
@@ -176,7 +201,7 @@ impl<O: Observer> MoveChecker<'_, O> {
     /// gets the swing's box as a second chance when its box was the envelope's (false all
     /// the same: its group was kept).
     #[inline(always)]
-    fn offer_group(&self, offers: &mut Offers, group: &[usize]) -> Option<bool> {
+    fn offer_group<const SWING: bool>(&self, offers: &mut Offers, group: &[usize]) -> Option<bool> {
         let Offers {
             whole,
             pieces,
@@ -209,7 +234,7 @@ impl<O: Observer> MoveChecker<'_, O> {
         {
             let m = &moves[i];
             let works = pieces.get(m.first..m.first + m.count).unwrap_or_default();
-            w.let_go = self.below_run(&self.move_states(works, r, Fit::Swing), run);
+            w.let_go = self.below_run(&self.move_states::<SWING>(works, r, Fit::Swing), run);
         }
         Some(false)
     }
@@ -219,7 +244,7 @@ impl<O: Observer> MoveChecker<'_, O> {
     /// A move of few pieces gets the swing's box at once; one of many (an input shaper's),
     /// the envelope's, which lets it go most of the time.
     #[inline(always)]
-    fn whole_box(&self, works: &[PieceWork]) -> Option<WholeMove> {
+    fn whole_box<const SWING: bool>(&self, works: &[PieceWork]) -> Option<WholeMove> {
         let r = self.response.as_ref()?;
         let period_s = self.machine.sampling.period_s;
         // None unless every piece is sampled.
@@ -233,7 +258,7 @@ impl<O: Observer> MoveChecker<'_, O> {
             Fit::Envelope
         };
         Some(WholeMove {
-            states: self.move_states(works, r, fit),
+            states: self.move_states::<SWING>(works, r, fit),
             count,
             fit,
             let_go: false,
@@ -242,11 +267,16 @@ impl<O: Observer> MoveChecker<'_, O> {
 
     /// The join of the boxes of a move's pieces (not empty), slacked once.
     #[inline(always)]
-    fn move_states(&self, works: &[PieceWork], r: &Response, fit: Fit) -> StateBox {
+    fn move_states<const SWING: bool>(
+        &self,
+        works: &[PieceWork],
+        r: &Response,
+        fit: Fit,
+    ) -> StateBox {
         let period_s = self.machine.sampling.period_s;
-        let mut raw = piece_raw(&works[0], r, period_s, fit);
+        let mut raw = piece_raw::<SWING>(&works[0], r, period_s, fit);
         for w in &works[1..] {
-            raw = raw.join(&piece_raw(w, r, period_s, fit));
+            raw = raw.join(&piece_raw::<SWING>(w, r, period_s, fit));
         }
         raw.slacked()
     }
@@ -334,7 +364,7 @@ mod tests {
             for m in b.moves.iter().filter(|m| m.count > 0) {
                 let works = &b.pieces[m.first..m.first + m.count];
                 for fit in [Fit::Envelope, Fit::Swing] {
-                    let states = checker.move_states(works, r, fit);
+                    let states = checker.move_states::<false>(works, r, fit);
                     let mut check = |s: crate::resample::Sample| {
                         samples += 1;
                         for i in 0..3 {
@@ -357,9 +387,10 @@ mod tests {
         }
     }
 
-    /// The AVX2 build of the decision (the boxes and the halving of kept groups) gives the
-    /// baseline's boxes and decisions bit for bit, with and without a shaper (run's peaks
-    /// at 0.9 of the dense ones, so that both outcomes occur).
+    /// The AVX2 build of the decision (the boxes and the halving of kept groups, with and
+    /// without the swing's lanes) gives the baseline's boxes and decisions bit for bit,
+    /// with and without a shaper (run's peaks at 0.9 of the dense ones, so that both
+    /// outcomes occur).
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn avx2_decides_as_the_baseline() {
@@ -372,12 +403,15 @@ mod tests {
             let checker = MoveChecker::new(&machine, ());
             let mut scratch = Box::<Scratch>::default();
             let run = run_at(&machine, &b, 0.9);
-            checker.let_go_whole_generic::<false>(&mut scratch, &b.pieces, &b.moves, &run);
+            checker.let_go_whole_generic::<false, false>(&mut scratch, &b.pieces, &b.moves, &run);
             let baseline = scratch.whole.clone();
-            // SAFETY: the CPU has AVX2, checked above.
-            unsafe { checker.let_go_whole_avx2(&mut scratch, &b.pieces, &b.moves, &run) };
             let went = baseline.iter().flatten().filter(|w| w.let_go).count();
             assert!(went > 50 && went < baseline.len(), "{went} went");
+            // SAFETY: the CPU has AVX2, checked above.
+            unsafe { checker.let_go_whole_avx2::<false>(&mut scratch, &b.pieces, &b.moves, &run) };
+            assert_eq!(scratch.whole, baseline);
+            // With the swing's lanes too (SAFETY: as above).
+            unsafe { checker.let_go_whole_avx2::<true>(&mut scratch, &b.pieces, &b.moves, &run) };
             assert_eq!(scratch.whole, baseline);
         }
     }
@@ -424,7 +458,8 @@ mod tests {
                 let works = &b.pieces[m.first..m.first + m.count];
                 let alone = checker.below_run(&w.states, &run)
                     || (w.fit == Fit::Envelope
-                        && checker.below_run(&checker.move_states(works, r, Fit::Swing), &run));
+                        && checker
+                            .below_run(&checker.move_states::<false>(works, r, Fit::Swing), &run));
                 second += usize::from(w.fit == Fit::Envelope);
                 assert!(!alone || w.let_go, "line {}: lost by the groups", m.line);
                 if w.let_go {
