@@ -34,9 +34,10 @@ pub struct Shaper {
     tau_hi: f64,
     /// Planned pieces still needed (the last one's end is known).
     planned: Window,
-    /// Each pulse's lookup slot in `planned` (0 is the planned motion itself): X's pulses,
-    /// then Y's (Y's are X's when both axes have the same shaper).
-    slots: [[usize; pulses::MAX_PULSES]; 2],
+    /// Each axis's first lookup slot in `planned`, its pulses' slots that one and the next
+    /// ones (0 is the planned motion itself): X's pulses, then Y's (Y's are X's when both
+    /// axes have the same shaper).
+    slots: [usize; 2],
     /// The slots `next_break` asks: 0 and the pulses of each distinct shaper.
     break_slots: usize,
     /// Each slot's offset, s.
@@ -58,7 +59,7 @@ impl Shaper {
         let axes = [Pulses::of(shaper.x), Pulses::of(shaper.y)];
         let tau_lo = axes[0].span_s().0.min(axes[1].span_s().0);
         let tau_hi = axes[0].span_s().1.max(axes[1].span_s().1);
-        let mut slots = [[0; pulses::MAX_PULSES]; 2];
+        let mut slots = [0; 2];
         let mut offsets = [0.0; window::MAX_OFFSETS];
         let mut break_slots = 1;
         for axis in 0..2 {
@@ -66,8 +67,8 @@ impl Shaper {
                 slots[1] = slots[0];
                 break;
             }
-            for (i, (_, tau)) in axes[axis].iter().enumerate() {
-                slots[axis][i] = break_slots;
+            slots[axis] = break_slots;
+            for (_, tau) in axes[axis].iter() {
                 offsets[break_slots] = tau;
                 break_slots += 1;
             }
@@ -302,11 +303,16 @@ impl Shaper {
     /// Σ a_i · planned(ta + τ_i) over `axis`'s pulses, in X and Y: position, velocity and
     /// acceleration at the start of the commanded piece over [ta, tb) (`mid` its middle,
     /// where each pulse's planned piece is looked up).
+    ///
+    /// The pulses' cursors are taken as one slice, checked once, not looked up slot by slot
+    /// (−1.1 % of a shaped run's instructions, docs/performance.md).
     #[inline(always)]
     fn pulse_sum(&self, axis: usize, ta: f64, mid: f64) -> [[f64; 2]; 3] {
         let mut sum = [[0.0; 2]; 3];
-        for (i, (w, tau)) in self.axes[axis].iter().enumerate() {
-            let s = self.planned.planned_at(self.slots[axis][i], mid + tau);
+        let pulses = &self.axes[axis];
+        let cursors = self.planned.cursors(self.slots[axis], pulses.count());
+        for ((w, tau), &next) in pulses.iter().zip(cursors) {
+            let s = self.planned.in_force(next, mid + tau);
             let (ps, vs, as_) = self.planned.state(s, ta + tau);
             for k in 0..2 {
                 sum[0][k] += w * ps[k];

@@ -247,6 +247,11 @@ impl Pulses {
         (0..self.n).map(|i| (self.a[i], self.tau_s[i]))
     }
 
+    /// The number of pulses.
+    pub fn count(&self) -> usize {
+        self.n
+    }
+
     /// The smallest and largest offset, s.
     pub fn span_s(&self) -> (f64, f64) {
         (self.tau_s[0], self.tau_s[self.n - 1])

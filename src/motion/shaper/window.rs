@@ -175,7 +175,18 @@ impl Window {
     /// answer the piece in force at the time last asked.)
     #[inline(always)]
     pub fn planned_at(&self, k: usize, t: f64) -> Option<usize> {
-        let next = self.starts[k];
+        self.in_force(self.starts[k], t)
+    }
+
+    /// The cursors of `n` offsets from `first` on.
+    #[inline(always)]
+    pub fn cursors(&self, first: usize, n: usize) -> &[usize] {
+        &self.starts[first..first + n]
+    }
+
+    /// [`Self::planned_at`] for the offset whose cursor is `next`.
+    #[inline(always)]
+    pub fn in_force(&self, next: usize, t: f64) -> Option<usize> {
         if next <= self.head {
             return None;
         }
