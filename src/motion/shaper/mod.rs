@@ -15,6 +15,7 @@ pub use pulses::{
 
 use super::{CONTINUITY_MM, JUMP_MIN_MM_S, MAX_PHASE_CHANGES, Phase, PhaseChanges, Segment};
 use crate::interval::lesser;
+use crate::path::Vec3;
 use window::Window;
 
 /// A commanded piece no longer than this is left out, s: two breaks a rounding apart.
@@ -141,10 +142,15 @@ impl Shaper {
             out(seg);
             return;
         }
+        // The last piece's end, found once for both questions (−0.6 % of a shaped run's
+        // instructions, docs/performance.md).
+        let mut runs_on = false;
         if let Some(last) = self.planned.back() {
-            let (p_end, _) = last.end();
-            if (seg.p - p_end).norm() > CONTINUITY_MM {
+            let end = last.end();
+            if (seg.p - end.0).norm() > CONTINUITY_MM {
                 self.finish_until(seg.t0_s, out);
+            } else {
+                runs_on = self.runs_on(last, end, &seg);
             }
         }
         if self.fresh {
@@ -153,10 +159,6 @@ impl Shaper {
             self.fresh = false;
         }
         let known_s = seg.t1_s();
-        let runs_on = self
-            .planned
-            .back()
-            .is_some_and(|last| self.runs_on(last, &seg));
         self.planned.push(seg, runs_on);
         // A slot without a later planned start saw the end of the last piece, or nothing.
         self.breaks = [f64::NEG_INFINITY; window::MAX_OFFSETS];
@@ -235,11 +237,12 @@ impl Shaper {
     }
 
     /// Whether the axes the shaper leaves as planned (Z, and X or Y if unshaped) run on
-    /// from `last` into `next`, the planned piece after it, of the same line: same
-    /// acceleration, no jump. Then the commanded motion does not break there.
-    fn runs_on(&self, last: &Segment, next: &Segment) -> bool {
+    /// from `last` (which ends at `end`) into `next`, the planned piece after it, of the same
+    /// line: same acceleration, no jump. Then the commanded motion does not break there.
+    #[inline(always)]
+    fn runs_on(&self, last: &Segment, end: (Vec3, Vec3), next: &Segment) -> bool {
         let moving = |s: &Segment| matches!(s.phase, Phase::Accel | Phase::Cruise | Phase::Decel);
-        let (p, v) = last.end();
+        let (p, v) = end;
         let unshaped = [!self.shaped[0], !self.shaped[1], true];
         last.line == next.line
             && moving(last)
