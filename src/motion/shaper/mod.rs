@@ -44,8 +44,8 @@ pub struct Shaper {
     /// Each slot's offset, s.
     offsets: [f64; window::MAX_OFFSETS],
     /// Each slot's last answer of [`Self::next_break`] (a planned break, or infinity for
-    /// none), still the answer while it lies beyond the time asked and no piece came since;
-    /// −∞ when it must be asked again.
+    /// none), still the answer while it lies beyond the time asked and, if it was no
+    /// planned start, no piece came since; −∞ when it must be asked again.
     breaks: [f64; window::MAX_OFFSETS],
     /// Commanded motion is out up to here.
     t_out: f64,
@@ -159,9 +159,14 @@ impl Shaper {
             self.fresh = false;
         }
         let known_s = seg.t1_s();
+        // A slot without a later planned start saw the end of the last piece, or nothing:
+        // it must be asked again. The others' breaks, planned starts, stay.
+        for slot in 1..self.break_slots {
+            if self.planned.passed_all(slot) {
+                self.breaks[slot] = f64::NEG_INFINITY;
+            }
+        }
         self.planned.push(seg, runs_on);
-        // A slot without a later planned start saw the end of the last piece, or nothing.
-        self.breaks = [f64::NEG_INFINITY; window::MAX_OFFSETS];
         self.emit_until(known_s - self.tau_hi, out);
     }
 
@@ -188,9 +193,10 @@ impl Shaper {
     fn emit_until(&mut self, t_end: f64, out: &mut impl FnMut(Segment)) {
         while self.t_out < t_end {
             let ta = self.t_out;
-            let tb = lesser(self.next_break(ta), t_end);
+            let (next, runs_on) = self.next_break(ta);
+            let tb = lesser(next, t_end);
             if tb - ta > MIN_PIECE_S {
-                out(self.piece(ta, tb));
+                out(self.piece(ta, tb, runs_on));
             }
             self.t_out = tb;
             self.drop_unneeded();
@@ -201,27 +207,33 @@ impl Shaper {
     /// call): a planned break b seen by a pulse of offset τ is at b − τ; the planned breaks
     /// themselves (offset 0) break the unshaped axes, and name the line and its phase.
     ///
-    /// A pulse's break is found again only once `t` has passed it (or a piece came): the
-    /// first planned start after t + τ is still the one found for an earlier t as long as
-    /// it lies beyond t + τ, since the starts before it lay before the earlier t + τ.
+    /// A pulse's break is found again only once `t` has passed it (or a piece came when it
+    /// was the end of the last): the first planned start after t + τ is still the one found
+    /// for an earlier t as long as it lies beyond t + τ, since the starts before it lay
+    /// before the earlier t + τ, and a piece that comes starts after it. Asking again only
+    /// those slots (not all at each piece that comes), the bookkeeping by slices and the
+    /// flag below: −0.5 % of a shaped run's instructions (docs/performance.md).
     ///
     /// A planned start of the same line that the unshaped axes run on through
     /// ([`Self::runs_on`]) is no break: the piece runs on, and names the starts it passes
     /// ([`PhaseChanges`], at most [`MAX_PHASE_CHANGES`]; their samples are taken as
-    /// before).
+    /// before). The flag returned tells whether it runs on through one (else it names
+    /// none).
     #[inline(always)]
-    fn next_break(&mut self, t: f64) -> f64 {
+    fn next_break(&mut self, t: f64) -> (f64, bool) {
         let mut best = f64::INFINITY;
-        for slot in 1..self.break_slots {
-            let tau = self.offsets[slot];
+        let n = self.break_slots;
+        let (breaks, offsets) = (&mut self.breaks[..n], &self.offsets[..n]);
+        for slot in 1..n {
+            let tau = offsets[slot];
             // Breaks of the planned motion after t + τ: the pieces' starts and the end.
             let want = t + tau + 1e-12;
-            if self.breaks[slot] <= want {
+            if breaks[slot] <= want {
                 let i = self.planned.next_start(slot, want);
-                self.breaks[slot] = self.planned.start_or_end(i, want);
+                breaks[slot] = self.planned.start_or_end(i, want);
             }
             // Never NaN (a time, or ±∞ less a finite offset): a plain comparison.
-            best = lesser(best, self.breaks[slot] - tau);
+            best = lesser(best, breaks[slot] - tau);
         }
         // The planned motion's own starts before the pulses' first break: asked each time,
         // as the starts passed count from `t`.
@@ -230,10 +242,10 @@ impl Shaper {
         for n in 0..=MAX_PHASE_CHANGES {
             let b = self.planned.start_or_end(i + n, want);
             if b >= best || n == MAX_PHASE_CHANGES || self.planned.runs_on(i + n) != Some(true) {
-                return lesser(best, b);
+                return (lesser(best, b), n > 0);
             }
         }
-        best
+        (best, true)
     }
 
     /// Whether the axes the shaper leaves as planned (Z, and X or Y if unshaped) run on
@@ -255,9 +267,9 @@ impl Shaper {
     }
 
     /// The commanded piece over [ta, tb), inside which no pulse crosses a planned break
-    /// (`ta` never smaller than at the last call).
+    /// (`ta` never smaller than at the last call); `runs_on` as [`Self::next_break`] said.
     #[inline(always)]
-    fn piece(&self, ta: f64, tb: f64) -> Segment {
+    fn piece(&self, ta: f64, tb: f64, runs_on: bool) -> Segment {
         let mid = 0.5 * (ta + tb);
         let planned = &self.planned;
         // The planned piece in force at `ta`: slot 0's cursor was last asked there.
@@ -281,12 +293,13 @@ impl Shaper {
                 }
             }
         }
+        let none = (PhaseChanges::NONE, PhaseChanges::NO_PHASES);
         let (line, phase, (changes, later_phases)) =
             match own.and_then(|i| Some((i, planned.get(i)?))) {
-                Some((i, s)) => (s.line, s.phase, planned.changes(i, tb)),
+                Some((i, s)) if runs_on => (s.line, s.phase, planned.changes(i, tb)),
+                Some((_, s)) => (s.line, s.phase, none),
                 None => {
                     let s = planned.front().or(planned.back());
-                    let none = (PhaseChanges::NONE, PhaseChanges::NO_PHASES);
                     (s.map_or(0, |s| s.line), Phase::Rest, none)
                 }
             };

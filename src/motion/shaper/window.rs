@@ -178,6 +178,12 @@ impl Window {
         self.in_force(self.starts[k], t)
     }
 
+    /// Whether offset `k`'s cursor has passed every piece's start.
+    #[inline(always)]
+    pub fn passed_all(&self, k: usize) -> bool {
+        self.starts[k] >= self.pieces.len()
+    }
+
     /// The cursors of `n` offsets from `first` on.
     #[inline(always)]
     pub fn cursors(&self, first: usize, n: usize) -> &[usize] {
