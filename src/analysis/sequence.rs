@@ -63,8 +63,14 @@ pub struct Sequencer {
     drive: DriveStage,
     /// The batch's last piece is open: the next piece tells its end (the end sample, the
     /// rigid model's impulses), see [`Self::close_last`].
-    open: Option<Open>,
-    /// The duration of the last piece's last part (its last phase), s.
+    open: bool,
+    /// With the rigid model, what closing the open piece needs besides its successor.
+    /// Only its impulses ask it and the duration below ([`Kicks::around`]), so a sprung
+    /// drive does not keep them (with the piece's work pushed before its line's group is
+    /// opened, whose call kept the drive's lags in memory: −0.9 % / −1.7 % of a run's
+    /// instructions without and with a shaper, docs/performance.md).
+    rigid_open: Open,
+    /// With the rigid model, the duration of the last piece's last part (its last phase), s.
     last_dt: f64,
     corner_until_s: f64,
     /// Lines whose planned moves were checked but whose pieces have not come yet.
@@ -77,8 +83,9 @@ pub struct Sequencer {
     span_s: Option<(f64, f64)>,
 }
 
-/// What closing the batch's last piece needs besides its successor ([`Sequencer::close_last`]).
-#[derive(Clone, Copy)]
+/// What closing the batch's last piece needs besides its successor, with the rigid model
+/// ([`Sequencer::close_last`]).
+#[derive(Clone, Copy, Default)]
 struct Open {
     /// The commanded velocity jump at its start, mm/s.
     jump: Vec3,
@@ -118,7 +125,8 @@ impl Sequencer {
                 Drive::Spring(s) => Some(Response::new(s)),
             },
             drive: DriveStage::new(&machine.drive),
-            open: None,
+            open: false,
+            rigid_open: Open::default(),
             last_dt: 0.0,
             corner_until_s: f64::NEG_INFINITY,
             checked: VecDeque::new(),
@@ -216,7 +224,7 @@ impl Sequencer {
     /// The end of the motion: the drive's settling, the last piece, the lines checked
     /// that had no piece.
     pub fn finish(&mut self) {
-        if let (Some(r), Some(last)) = (&self.response, self.open.and(self.batch.pieces.last())) {
+        if let (Some(r), Some(last)) = (&self.response, self.batch.pieces.last().filter(|_| self.open)) {
             let seg = last.commanded;
             let (p, _) = seg.end();
             let settle = Segment::rest(seg.t1_s(), SETTLE_PERIODS * r.period_s(), p, seg.line);
@@ -225,7 +233,7 @@ impl Sequencer {
         self.close_last(None);
         self.merge_checked_into_open();
         while let Some(c) = self.checked.pop_front() {
-            self.open_group(c);
+            self.open_group(c, self.batch.pieces.len());
         }
     }
 
@@ -241,7 +249,7 @@ impl Sequencer {
         let next = self.spare.take().unwrap_or_default();
         let mut batch = std::mem::replace(&mut self.batch, next);
         if !complete && let Some(open) = batch.moves.last_mut() {
-            let carried = self.open.and_then(|_| batch.pieces.pop());
+            let carried = self.open.then(|| batch.pieces.pop()).flatten();
             open.split = true;
             open.count -= usize::from(carried.is_some());
             let checks = PathChecks {
@@ -272,7 +280,7 @@ impl Sequencer {
 
     /// Pieces waiting in the batch, closed.
     fn pending_pieces(&self) -> usize {
-        self.batch.pieces.len() - usize::from(self.open.is_some())
+        self.batch.pieces.len() - usize::from(self.open)
     }
 
     /// Closes the batch's last piece, now that its successor `next` (the commanded piece,
@@ -281,7 +289,8 @@ impl Sequencer {
     /// model the impulses around it.
     #[inline(always)]
     fn close_last(&mut self, next: Option<(&Segment, &DriveStep, bool)>) {
-        let (Some(open), Some(last)) = (self.open.take(), self.batch.pieces.last_mut()) else {
+        let (true, Some(last)) = (std::mem::take(&mut self.open), self.batch.pieces.last_mut())
+        else {
             return;
         };
         let (jump_out, next, jumps) = match next {
@@ -295,8 +304,8 @@ impl Sequencer {
             let seg = &last.commanded;
             last.edge = Edge::Kicks(Kicks::around(
                 seg,
-                open.jump,
-                open.prev_dt,
+                self.rigid_open.jump,
+                self.rigid_open.prev_dt,
                 jump_out,
                 next_dt,
                 self.period_s,
@@ -306,7 +315,8 @@ impl Sequencer {
     }
 
     /// Adds the sampling work of the commanded piece `c`, with what the drive made of it,
-    /// to its line's group; open until its successor comes.
+    /// to its line's group; open until its successor comes. The work is pushed first and
+    /// the group opened after it: no vector of the drive is live across that call.
     #[inline(always)]
     fn add(&mut self, c: &Segment, step: &DriveStep, jumps: bool) {
         if jumps {
@@ -315,21 +325,24 @@ impl Sequencer {
                 None => f64::NEG_INFINITY,
             };
         }
+        self.open = true;
+        if self.response.is_none() {
+            self.rigid_open = Open {
+                jump: step.jump,
+                prev_dt: self.last_dt,
+            };
+            self.last_dt = c.last_part_s();
+        }
+        self.batch
+            .pieces
+            .push(PieceWork::new(*c, step, self.corner_until_s));
         let line = c.line;
         let starts_group = self.batch.moves.last().is_none_or(|m| m.line != line);
         if starts_group {
             // Every check of the open group's line has come: its pieces have all come.
             self.merge_checked_into_open();
-            self.open_line(line);
+            self.open_line(line, self.batch.pieces.len() - 1);
         }
-        self.open = Some(Open {
-            jump: step.jump,
-            prev_dt: self.last_dt,
-        });
-        self.last_dt = c.last_part_s();
-        self.batch
-            .pieces
-            .push(PieceWork::new(*c, step, self.corner_until_s));
         if let Some(m) = self.batch.moves.last_mut() {
             m.count += 1;
         }
@@ -354,18 +367,18 @@ impl Sequencer {
 
     /// Starts the group of `line`, after the groups of the lines checked before it that
     /// have no piece; the checks of its own planned moves merged into it.
-    fn open_line(&mut self, line: u64) {
+    fn open_line(&mut self, line: u64, first: usize) {
         while self.checked.front().is_some_and(|c| c.line < line) {
             if let Some(c) = self.checked.pop_front() {
-                self.open_group(c);
+                self.open_group(c, first);
             }
         }
         // Its first planned move's checks as they are (most lines have one planned move).
-        let first = match self.checked.front() {
+        let own = match self.checked.front() {
             Some(c) if c.line == line => self.checked.pop_front(),
             _ => None,
         };
-        let mut open = first.unwrap_or_else(|| Checked {
+        let mut open = own.unwrap_or_else(|| Checked {
             line,
             checks: PathChecks::default(),
             end_xy_mm: self.batch.moves.last().map_or([0.0; 2], |m| m.end_xy_mm),
@@ -376,17 +389,17 @@ impl Sequencer {
                 open.end_xy_mm = c.end_xy_mm;
             }
         }
-        self.open_group(open);
+        self.open_group(open, first);
     }
 
-    fn open_group(&mut self, c: Checked) {
+    fn open_group(&mut self, c: Checked, first: usize) {
         self.group += 1;
         self.batch.moves.push(MoveWork {
             group: self.group,
             line: c.line,
             checks: c.checks,
             end_xy_mm: c.end_xy_mm,
-            first: self.batch.pieces.len(),
+            first,
             count: 0,
             split: false,
         });
