@@ -37,9 +37,9 @@ fn plan(machine: &Machine, events: &[Event]) -> Vec<PlannedMove> {
     let mut planner = Planner::new(machine);
     let mut out = Vec::new();
     for e in events {
-        planner.push(e, &mut out);
+        planner.push(e, &mut |m| out.push(m));
     }
-    planner.finish(&mut out);
+    planner.finish(&mut |m| out.push(m));
     out
 }
 

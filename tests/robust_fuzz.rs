@@ -182,12 +182,12 @@ fn check_planner(data: &[u8], machine: &Machine) -> (usize, f64) {
             if let Event::Move(m) = &e {
                 move_lines.push(m.line);
             }
-            planner.push(&e, &mut out);
+            planner.push(&e, &mut |m| out.push(m));
         },
         |_| {},
     )
     .expect("reading from memory cannot fail");
-    planner.finish(&mut out);
+    planner.finish(&mut |m| out.push(m));
     out.iter().for_each(check_planned);
     let time_s = planner.print_time_s();
     assert!(time_s.is_finite() && time_s >= 0.0);
@@ -514,9 +514,9 @@ proptest! {
         let mut planner = Planner::new(&machine);
         let mut out = Vec::new();
         for e in events {
-            planner.push(&e, &mut out);
+            planner.push(&e, &mut |m| out.push(m));
         }
-        planner.finish(&mut out);
+        planner.finish(&mut |m| out.push(m));
         out.iter().for_each(check_planned);
         prop_assert!(planner.print_time_s().is_finite());
     }

@@ -66,10 +66,10 @@ impl Planner {
         }
     }
 
-    /// Takes the next event; appends to `out` the moves whose plan is now final.
+    /// Takes the next event; hands `out` the moves whose plan is now final, in order.
     /// Takes the event by reference: an `Event` is large, and taken by value each was
     /// copied by a call to `memcpy`.
-    pub fn push(&mut self, event: &Event, out: &mut Vec<PlannedMove>) {
+    pub fn push(&mut self, event: &Event, out: &mut impl FnMut(PlannedMove)) {
         match event {
             Event::Move(m) => {
                 if let Some(q) = self.limits.queued_move(m) {
@@ -91,8 +91,8 @@ impl Planner {
         }
     }
 
-    /// End of the input: plans and appends every move still queued.
-    pub fn finish(&mut self, out: &mut Vec<PlannedMove>) {
+    /// End of the input: plans and hands `out` every move still queued.
+    pub fn finish(&mut self, out: &mut impl FnMut(PlannedMove)) {
         self.lookahead.flush_all(out);
     }
 

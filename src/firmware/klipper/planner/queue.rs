@@ -225,7 +225,7 @@ impl Lookahead {
 
     /// toolhead.py `LookAheadQueue.add_move`, then a lazy flush when enough time is queued,
     /// and the cap.
-    pub(super) fn add(&mut self, mut m: QueuedMove, out: &mut Vec<PlannedMove>) {
+    pub(super) fn add(&mut self, mut m: QueuedMove, out: &mut impl FnMut(PlannedMove)) {
         if let Some(prev) = self.queue.back() {
             m.calc_junction(prev, self.icv_mm_s);
             self.flush_budget_s -= m.min_move_t_s;
@@ -243,7 +243,7 @@ impl Lookahead {
     }
 
     /// Plans and hands on every queued move; the toolhead ends at rest.
-    pub(super) fn flush_all(&mut self, out: &mut Vec<PlannedMove>) {
+    pub(super) fn flush_all(&mut self, out: &mut impl FnMut(PlannedMove)) {
         self.flush(Flush::All, out);
         self.flush_budget_s = BUFFER_TIME_HIGH_S;
     }
@@ -256,7 +256,7 @@ impl Lookahead {
     /// change: Klipper's (a move whose minimum_cruise_ratio start is capped by its own
     /// limits, behind another peak), plus ours, that the boundary's real start speed is
     /// capped by its junction limit and not by how fast it could still decelerate.
-    fn flush(&mut self, mode: Flush, out: &mut Vec<PlannedMove>) {
+    fn flush(&mut self, mode: Flush, out: &mut impl FnMut(PlannedMove)) {
         self.flush_budget_s = LOOKAHEAD_FLUSH_TIME_S;
         let n = self.queue.len();
         if n == 0 {
@@ -317,7 +317,7 @@ impl Lookahead {
 
     /// The forward pass over the first `count` moves, which leave the queue. Returns the
     /// end speed² of the last one.
-    fn hand_on(&mut self, count: usize, out: &mut Vec<PlannedMove>) -> f64 {
+    fn hand_on(&mut self, count: usize, out: &mut impl FnMut(PlannedMove)) -> f64 {
         let mut prev_cruise_v2 = self.last_cruise_v2;
         let mut end_v2 = 0.0;
         for (m, j) in self.queue.iter().zip(&self.junctions).take(count) {
@@ -330,7 +330,7 @@ impl Lookahead {
                 self.print_time_s,
             );
             self.print_time_s += p.duration_s();
-            out.push(p);
+            out(p);
             prev_cruise_v2 = cruise_v2;
         }
         self.queue.drain(..count);

@@ -94,9 +94,9 @@ fn plan_with(machine: &Machine, events: &[Event]) -> (Vec<PlannedMove>, f64) {
     let mut p = Planner::new(machine);
     let mut out = Vec::new();
     for e in events {
-        p.push(e, &mut out);
+        p.push(e, &mut |m| out.push(m));
     }
-    p.finish(&mut out);
+    p.finish(&mut |m| out.push(m));
     check_consistent(&out);
     (out, p.print_time_s())
 }
@@ -572,13 +572,13 @@ fn lazy_and_whole(mach: &Machine, events: &[Event]) -> [(Vec<PlannedMove>, f64, 
         let mut out = Vec::new();
         let mut max_queued = 0;
         for e in events {
-            p.push(e, &mut out);
+            p.push(e, &mut |m| out.push(m));
             max_queued = max_queued.max(p.queued());
         }
         if !lazy {
             assert!(out.is_empty(), "the reference must hold the whole input");
         }
-        p.finish(&mut out);
+        p.finish(&mut |m| out.push(m));
         check_consistent(&out);
         (out, p.print_time_s(), max_queued)
     })
@@ -617,7 +617,9 @@ fn queue_stays_short_on_a_million_segment_line() {
     for i in 0..1_000_000u32 {
         let x0 = -5000.0 + 0.01 * f64::from(i);
         let path = line([x0, 0.0, 0.0], [x0 + 0.01, 0.0, 0.0]);
-        p.push(&mv(u64::from(i) + 1, path, 0.0, 100.0), &mut out);
+        p.push(&mv(u64::from(i) + 1, path, 0.0, 100.0), &mut |m| {
+            out.push(m)
+        });
         max_queued = max_queued.max(p.queued());
         if i >= 10_000 {
             max_later = max_later.max(p.queued());
@@ -625,7 +627,7 @@ fn queue_stays_short_on_a_million_segment_line() {
         count += out.len();
         out.clear();
     }
-    p.finish(&mut out);
+    p.finish(&mut |m| out.push(m));
     count += out.len();
     assert_eq!(count, 1_000_000);
     assert!(max_queued <= 10_000, "queue reached {max_queued}");
@@ -661,10 +663,10 @@ fn queue_cap_bounds_a_ramp_that_never_peaks() {
     let mut got = Vec::new();
     let mut max_queued = 0;
     for e in &events {
-        capped.push(e, &mut got);
+        capped.push(e, &mut |m| got.push(m));
         max_queued = max_queued.max(capped.queued());
     }
-    capped.finish(&mut got);
+    capped.finish(&mut |m| got.push(m));
     assert!(max_queued <= 1000);
     assert_eq!(got.len(), 20_000);
     check_consistent(&got);
@@ -716,12 +718,12 @@ fn klipper_before_2024_keeps_its_accel_to_decel_when_accel_changes() {
         };
         let mut planner = Planner::new(m);
         let mut out = Vec::new();
-        planner.push(&Event::Limits { line: 1, change }, &mut out);
+        planner.push(&Event::Limits { line: 1, change }, &mut |m| out.push(m));
         planner.push(
             &mv(2, line([0.0, 0.0, 0.0], [10.0, 0.0, 0.0]), 0.0, 300.0),
-            &mut out,
+            &mut |m| out.push(m),
         );
-        planner.finish(&mut out);
+        planner.finish(&mut |m| out.push(m));
         out[0].cruise_v_mm_s
     };
     let mut now = machine();
