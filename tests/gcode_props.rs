@@ -38,7 +38,7 @@ fn gcode_like() -> impl Strategy<Value = Vec<u8>> {
 fn finite_event(e: &Event) -> bool {
     match e {
         Event::Move(m) => {
-            let path_ok = m.path.is_finite();
+            let path_ok = (m.path.start.iter().chain(m.path.end.iter())).all(|v| v.is_finite());
             path_ok
                 && m.e_mm.is_finite()
                 && m.feed_mm_s.is_finite()
