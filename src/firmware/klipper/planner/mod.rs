@@ -72,9 +72,8 @@ impl Planner {
     pub fn push(&mut self, event: &Event, out: &mut impl FnMut(PlannedMove)) {
         match event {
             Event::Move(m) => {
-                if let Some(q) = self.limits.queued_move(m) {
-                    self.lookahead.add(q, out);
-                }
+                let lookahead = &mut self.lookahead;
+                self.limits.queued_move(m, |q| lookahead.add(q, out));
             }
             Event::Stop { dwell_s, .. } => {
                 self.lookahead.flush_all(out);
