@@ -64,9 +64,14 @@ impl Path {
 
     /// Unit direction (zero for a zero-length path).
     pub fn dir(&self) -> Vec3 {
-        let d = self.end - self.start;
-        let n = d.norm();
-        if n > 0.0 { d / n } else { Vec3::zeros() }
+        let n = self.length_mm();
+        if n > 0.0 { self.unit(n) } else { Vec3::zeros() }
+    }
+
+    /// The unit direction of a path whose [`Self::length_mm`] is `length_mm` (not 0): the
+    /// bits of [`Self::dir`], without computing the length again.
+    pub fn unit(&self, length_mm: f64) -> Vec3 {
+        (self.end - self.start) / length_mm
     }
 
     /// Whether the path moves in XY.

@@ -33,7 +33,7 @@ impl PlannedPieces {
             }
             return;
         }
-        let dir = (mv.path.end() - start) / mv.distance_mm;
+        let dir = mv.dir;
         let a = mv.accel_mm_s2;
         let mut t = mv.t0_s;
         let mut s = 0.0;
@@ -79,6 +79,7 @@ mod tests {
             e_mm: 0.0,
             kinematic: true,
             distance_mm: d,
+            dir: (to - from) / d,
             start_v_mm_s: v[0],
             cruise_v_mm_s: v[1],
             end_v_mm_s: v[2],

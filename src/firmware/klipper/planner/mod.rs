@@ -30,6 +30,8 @@ pub struct PlannedMove {
     /// False for an extrude-only move: the nozzle stands still at `path.start()`.
     pub kinematic: bool,
     pub distance_mm: f64,
+    /// The path's unit direction, [`Path::dir`] (zero for an extrude-only move).
+    pub dir: Vec3,
     pub start_v_mm_s: f64,
     pub cruise_v_mm_s: f64,
     pub end_v_mm_s: f64,
