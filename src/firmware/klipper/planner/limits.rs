@@ -114,7 +114,10 @@ impl MoveLimits {
     /// of an unshaped run's instructions.)
     pub(super) fn queued_move(&self, m: &Move, queue: impl FnOnce(QueuedMove)) {
         let t = &self.toolhead;
-        let speed = if m.feed_mm_s > 0.0 && m.feed_mm_s.is_finite() {
+        // One comparison: +∞ is its own unlimited speed, and NaN fails it. (With a test of
+        // finiteness as well, the two became a dozen instructions on the bits: 0.35 % of an
+        // unshaped run's instructions.)
+        let speed = if m.feed_mm_s > 0.0 {
             m.feed_mm_s
         } else {
             f64::INFINITY
