@@ -69,12 +69,17 @@ impl<'a> ParsedLine<'a> {
             i += 1;
             let negative = b.get(i) == Some(&b'-');
             i += usize::from(negative);
-            let (int, int_count) = digits(b, &mut i);
-            let (frac, frac_count) = if b.get(i) == Some(&b'.') {
+            // All the digits as one integer (wrapping past 19 digits, which is declined):
+            // the fraction's digits go on from the integer part's, not valued apart and
+            // joined by a multiplication (0.38 % of an unshaped run's instructions; one loop
+            // for both parts, the point tested in it, was 0.7 % more).
+            let mut digits = 0;
+            let int_count = more_digits(b, &mut i, &mut digits);
+            let frac_count = if b.get(i) == Some(&b'.') {
                 i += 1;
-                digits(b, &mut i)
+                more_digits(b, &mut i, &mut digits)
             } else {
-                (0, 0)
+                0
             };
             // Whatever follows the number, but for a blank or a letter, is declined as
             // the next word's letter.
@@ -83,7 +88,7 @@ impl<'a> ParsedLine<'a> {
             if count == 0 || count > 15 || int_count > 9 {
                 return self.decline();
             }
-            let value = decimal(negative, int, frac, frac_count);
+            let value = decimal(negative, digits, frac_count);
             let bit = 1u32 << (letter - b'A');
             let index = self.words.len();
             if self.letters & bit != 0 || index == MAX_WORDS {
@@ -111,19 +116,18 @@ impl<'a> ParsedLine<'a> {
     }
 }
 
-/// The digits from `b[*i]` on, and how many (their value wraps past 19 digits, which the
-/// caller declines); `*i` moves past them.
+/// The digits from `b[*i]` on, appended to `value` (wrapping past 19 digits in all, which
+/// the caller declines); how many. `*i` moves past them.
 #[inline(always)]
-fn digits(b: &[u8], i: &mut usize) -> (u64, usize) {
+fn more_digits(b: &[u8], i: &mut usize, value: &mut u64) -> usize {
     let start = *i;
-    let mut value = 0u64;
     while let Some(&c) = b.get(*i)
         && c.is_ascii_digit()
     {
-        value = value.wrapping_mul(10).wrapping_add(u64::from(c - b'0'));
+        *value = value.wrapping_mul(10).wrapping_add(u64::from(c - b'0'));
         *i += 1;
     }
-    (value, *i - start)
+    *i - start
 }
 
 #[cfg(test)]

@@ -346,23 +346,25 @@ impl Numeral<'_> {
         let (int, frac) = (self.int, self.frac);
         let v = match int.count + frac.count {
             0 => return None,
-            1..=15 => decimal(self.negative, int.value, frac.value, frac.count),
+            1..=15 => {
+                let digits = int.value * POW10_INT[frac.count] + frac.value;
+                decimal(self.negative, digits, frac.count)
+            }
             _ => long_number(self.text)?,
         };
         (v.abs() <= MAX_NUMBER).then_some(v)
     }
 }
 
-/// The value of a number of at most 15 digits in all: its integer part's digits `int`, its
-/// fraction's `frac` (`frac_count` of them), negative or not. The mantissa (all the digits
-/// as one integer, below 10^15) and the power of ten are exact in an f64, so one division
-/// gives the correctly rounded value (Clinger's fast path).
+/// The value of a number of at most 15 digits in all: all its `digits` as one integer (the
+/// mantissa, below 10^15), `frac_count` of them after the point, negative or not. The
+/// mantissa and the power of ten are exact in an f64, so one division gives the correctly
+/// rounded value (Clinger's fast path).
 #[inline(always)]
-pub(super) fn decimal(negative: bool, int: u64, frac: u64, frac_count: usize) -> f64 {
-    let m = int * POW10_INT[frac_count] + frac;
+pub(super) fn decimal(negative: bool, digits: u64, frac_count: usize) -> f64 {
     // Below 2^53: exact as an i64 and as an f64 (and the signed conversion is one
     // instruction, the unsigned one several).
-    let v = m as i64 as f64 / POW10[frac_count];
+    let v = digits as i64 as f64 / POW10[frac_count];
     // The sign as a bit (v >= 0), not a branch: signs come at random.
     f64::from_bits(v.to_bits() | u64::from(negative) << 63)
 }
