@@ -170,7 +170,10 @@ impl<R: Read> LineReader<R> {
         self.chunks.bytes_read()
     }
 
-    /// The next line, or `None` at the end of the input.
+    /// The next line, or `None` at the end of the input. Inlined into the interpreter's
+    /// loop, as [`ChunkReader::next_chunk`] is into it (called, its result went through
+    /// memory: 0.45 % of an unshaped run's instructions).
+    #[inline(always)]
     pub fn next_line(&mut self) -> io::Result<Option<Line<'_>>> {
         while self.skipping {
             match self.chunks.next_chunk()? {
