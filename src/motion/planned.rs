@@ -88,7 +88,6 @@ mod tests {
             cruise_t_s: (d - da - dd) / v[1],
             decel_t_s: td,
             t0_s: t0,
-            offset_mm: Vec3::zeros(),
         }
     }
 

@@ -42,8 +42,6 @@ pub struct PlannedMove {
     pub decel_t_s: f64,
     /// Print time at the start of the move.
     pub t0_s: f64,
-    /// The G92 offset in force for the move (machine = file coordinates + offset), mm.
-    pub offset_mm: Vec3,
 }
 
 impl PlannedMove {

@@ -29,7 +29,6 @@ pub(super) struct QueuedMove {
     line: u64,
     path: Path,
     e_mm: f64,
-    offset_mm: Vec3,
     pub(super) kinematic: bool,
     pub(super) move_d_mm: f64,
     /// The path's unit direction (zero for an extrude-only move): once per move, where the
@@ -65,7 +64,6 @@ impl QueuedMove {
             line: m.line,
             path: m.path,
             e_mm: m.e_mm,
-            offset_mm: m.offset_mm,
             kinematic,
             move_d_mm,
             dir: if kinematic {
@@ -174,7 +172,6 @@ impl QueuedMove {
             cruise_t_s: cruise_d / cruise_v,
             decel_t_s: decel_d / ((end_v + cruise_v) * 0.5),
             t0_s,
-            offset_mm: self.offset_mm,
         }
     }
 }
