@@ -321,56 +321,75 @@ pub fn piece_samples(work: &PieceWork, period_s: f64) -> u64 {
 /// its count).
 ///
 /// A chain of pieces each starting where the one before it ends, each of positive length,
-/// has one start sample a piece, its phase changes' and end samples, and the grid points strictly inside the
-/// chain but for those on which a piece starts (they are that piece's start): two grid
-/// indices for the chain instead of one a piece. Whether a start lies on a grid point is
-/// asked exactly only when its time is within 1e-6 of a period's multiple (the grid's time
-/// `k as f64 * Ts` is within a few units in the last place of k·Ts); other chains go
-/// piece by piece.
+/// has one start sample a piece, its phase changes' and end samples, and the grid points
+/// strictly inside the chain but for those on which a piece starts (they are that piece's
+/// start): two grid indices for the chain instead of one a piece, each read off t/Ts when
+/// that is not near an integer ([`grid_ceil`]). Whether a start lies on a grid point is
+/// asked exactly only when its t/Ts is near an integer. The chain's times rise, so its
+/// starts' t/Ts lie between its ends': when both are below [`GRID_NEAR_MAX`], so are all
+/// of them, and the pieces need not ask; a chain beyond goes piece by piece, as does any
+/// other.
 ///
 /// None when a piece lasts longer than `longest_s` (a whole move's box is offered only when
 /// every piece is sampled): asked in the same pass, one loop over the pieces where two
 /// mispredicted their ends on the bunny's moves of one to four pieces.
 pub fn move_samples(works: &[PieceWork], period_s: f64, longest_s: f64) -> Option<u64> {
-    let (Some(first), Some(last)) = (works.first(), works.last()) else {
+    let Some((first, rest)) = works.split_first() else {
         return Some(0);
     };
     let inv = 1.0 / period_s;
-    let mut sampled = true;
-    let mut chain = true;
-    let mut ends = 0;
+    let (start, mut end) = (first.commanded.t0_s, first.commanded.t1_s());
+    let mut sampled = first.commanded.dt_s <= longest_s;
+    let mut chain = end > start;
+    let mut ends = u64::from(first.end_sample) + change_samples(&first.commanded, period_s);
     let mut on_grid = 0;
-    let mut prev_end = first.commanded.t0_s;
-    for w in works {
+    for w in rest {
         let (t0, t1) = (w.commanded.t0_s, w.commanded.t1_s());
         // Without a branch per piece: the fallback and long pieces are rare.
         sampled &= w.commanded.dt_s <= longest_s;
-        chain &= (t0 == prev_end) & (t1 > t0);
+        chain &= (t0 == end) & (t1 > t0);
         ends += u64::from(w.end_sample) + change_samples(&w.commanded, period_s);
-        let q = t0 * inv;
-        // Its distance to the nearest integer, the integer by adding and taking off 1.5·2^52
-        // (exact below GRID_NEAR_MAX; a saturating conversion takes six instructions more).
-        let off = (q - ((q + ROUND) - ROUND)).abs();
-        let near = !(off > GRID_NEAR && q.abs() < GRID_NEAR_MAX);
-        if near && !std::ptr::eq(w, first) {
+        if grid_ceil(t0 * inv).is_none() {
             on_grid += u64::from(first_grid_index(t0, period_s) as f64 * period_s == t0);
         }
-        prev_end = t1;
+        end = t1;
     }
     if !sampled {
         return None;
     }
-    if !chain {
+    let (q0, q1) = (start * inv, end * inv);
+    if !(chain && q0.abs() < GRID_NEAR_MAX && q1.abs() < GRID_NEAR_MAX) {
         return Some(piece_by_piece(works, period_s));
     }
-    let inside = first_grid_index(last.commanded.t1_s(), period_s)
-        - first_inside(first.commanded.t0_s, period_s);
-    Some(works.len() as u64 + ends + inside.max(0) as u64 - on_grid)
+    let from = grid_ceil(q0).unwrap_or_else(|| first_inside(start, period_s));
+    let to = grid_ceil(q1).unwrap_or_else(|| first_grid_index(end, period_s));
+    Some(works.len() as u64 + ends + (to - from).max(0) as u64 - on_grid)
+}
+
+/// ⌈q⌉ of q = t/Ts (computed `t * (1.0 / Ts)`) more than [`GRID_NEAR`] from an integer and
+/// of magnitude below [`GRID_NEAR_MAX`] (the caller's to ask): then both the smallest k
+/// with k·Ts ≥ t and the smallest with k·Ts > t, as the grid's times are computed
+/// (`k as f64 * Ts`), as [`first_grid_index`] and [`first_inside`] find them by their
+/// loops. None when q is near an integer. The integer by adding and taking off 1.5·2^52,
+/// read off the sum's last bits (a saturating conversion takes six instructions more).
+#[inline(always)]
+fn grid_ceil(q: f64) -> Option<i64> {
+    let shifted = q + ROUND;
+    let nearest = shifted - ROUND;
+    // Not `!(… <= GRID_NEAR)`: a NaN is near, asked exactly.
+    if (q - nearest).abs() > GRID_NEAR {
+        let k = shifted.to_bits() as i64 - ROUND.to_bits() as i64;
+        Some(k + i64::from(nearest < q))
+    } else {
+        None
+    }
 }
 
 /// How close t/Ts must come to an integer for [`move_samples`] to ask whether t is on the
-/// grid, and the largest t/Ts below which that is enough (above, always asked): at most
-/// ~1e-12 off for k below 1e9.
+/// grid, and the largest t/Ts below which that is enough (above, it goes piece by piece):
+/// below it t·(1/Ts) is within 3e-7 of t/Ts, and k·Ts within 1.2e-7·Ts of its exact
+/// value, so a t/Ts farther than this from an integer is at least 7e-7 from one and
+/// neither rounding can bring a grid time to the other side of t.
 const GRID_NEAR: f64 = 1e-6;
 const GRID_NEAR_MAX: f64 = 1e9;
 
@@ -405,14 +424,20 @@ fn samples_within(work: &PieceWork, first: i64, period_s: f64) -> (u64, i64) {
 }
 
 /// The samples at a piece's phase changes: each is a part's start ([`PieceWork::parts`]),
-/// but for one on a grid point, which is among the grid points inside.
+/// but for one on a grid point, which is among the grid points inside. Whether a change is
+/// on one is asked exactly only when its t/Ts is near an integer ([`grid_ceil`]).
 #[inline(always)]
 fn change_samples(seg: &Segment, period_s: f64) -> u64 {
     // Most pieces have none (every piece without a shaper): one test for them.
     if !seg.changes.at_s[0].is_finite() {
         return 0;
     }
-    let off_grid = |&c: &f64| c.is_finite() && first_grid_index(c, period_s) as f64 * period_s != c;
+    let off_grid = |&c: &f64| {
+        let q = c * (1.0 / period_s);
+        c.is_finite()
+            && ((q.abs() < GRID_NEAR_MAX && grid_ceil(q).is_some())
+                || first_grid_index(c, period_s) as f64 * period_s != c)
+    };
     seg.changes.at_s.iter().filter(|c| off_grid(c)).count() as u64
 }
 

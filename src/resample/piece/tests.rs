@@ -413,14 +413,15 @@ proptest::proptest! {
     /// one before it ends (then the end's grid index is reused), on a grid point, or
     /// elsewhere (a re-homing); and it is the samples `sample_piece` takes. Contiguous
     /// pieces ending on a grid point (or a unit in the last place beside it), early in a
-    /// print and hours into it, try the count of a whole chain.
+    /// print and hours into it, try the count of a whole chain; weeks into it, beyond
+    /// `GRID_NEAR_MAX` periods, piece by piece.
     #[test]
     fn a_chains_count_is_its_pieces_counts(
         pieces in proptest::collection::vec(
             (0.0..0.004f64, 0u8..6, proptest::bool::ANY, 0u8..3),
             1..12,
         ),
-        start in proptest::prop_oneof![0.0..0.01f64, 1e3..3e4f64],
+        start in proptest::prop_oneof![0.0..0.01f64, 1e3..3e4f64, 2e6..3e6f64],
     ) {
         let mut t = start;
         let mut works = Vec::new();
