@@ -169,6 +169,10 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
                 let works = pieces.get(m.first..m.first + m.count).unwrap_or_default();
                 self.sample_move(scratch, works, slot, out, None);
                 self.flush(scratch, out);
+                // Sampled after all: its peaks raise the run's below.
+                if let Some(w) = scratch.whole.get_mut(idx).and_then(Option::as_mut) {
+                    w.let_go = false;
+                }
             }
         }
         revisit.clear();
@@ -180,9 +184,15 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
             self.skipped.fetch_add(skipped, Ordering::Relaxed);
         }
         if let Some(floor) = &self.run_floor {
-            let whole = moves.iter().zip(&out[base..]).filter(|(m, _)| !m.split);
-            for (_, r) in whole {
-                floor.raise(&r.stats);
+            // A move let go whole has no peaks to raise the run's with, only its count: not
+            // offered to the floor (most moves go so; −0.5 % of a default run's
+            // instructions).
+            let went = |idx: usize| matches!(scratch.whole.get(idx), Some(Some(w)) if w.let_go);
+            let moves = moves.iter().zip(&out[base..]).enumerate();
+            for (idx, (m, r)) in moves {
+                if !m.split && !went(idx) {
+                    floor.raise(&r.stats);
+                }
             }
         }
     }
