@@ -359,6 +359,7 @@ where
 #[cfg(test)]
 mod tests {
     use super::super::{RunPeaks, pass_on, run_on};
+    use crate::gcode::Event;
     use crate::machine::test_support::kossel_machine;
     use crate::report::MoveStats;
     use std::panic::{AssertUnwindSafe, catch_unwind};
@@ -451,7 +452,7 @@ mod tests {
                 std::thread::spawn(move || {
                     let machine = kossel_machine();
                     let mut events = 0;
-                    let mut edit = |e, to: &mut dyn FnMut(_)| {
+                    let mut edit = |e: &Event, to: &mut dyn FnMut(&Event)| {
                         events += 1;
                         assert!(
                             !(in_firmware && events == 3000),

@@ -174,8 +174,8 @@ impl<'s> CapEdit<'s> {
     }
 
     /// Takes one event of the interpreter; hands on what the firmware is to see.
-    pub fn edit(&mut self, event: Event, out: &mut dyn FnMut(Event)) {
-        match &event {
+    pub fn edit(&mut self, event: &Event, out: &mut dyn FnMut(&Event)) {
+        match event {
             Event::Move(m) => {
                 let caps = self.caps(m.line);
                 let want = self.file.held().capped(&caps);
@@ -188,7 +188,7 @@ impl<'s> CapEdit<'s> {
                                 event: e,
                             });
                         }
-                        out(e);
+                        out(&e);
                     }
                     self.firmware.set(&want);
                 }
@@ -264,7 +264,7 @@ mod tests {
             mv(5),
             mv(6),
         ] {
-            edit.edit(e, &mut |e| seen.push(e));
+            edit.edit(&e, &mut |e| seen.push(*e));
         }
         let accel_change = |line, a| Event::Limits {
             line,
