@@ -25,11 +25,41 @@ use whole::WholeMove;
 /// Tolerance on the print radius and the bed, mm: rounding in slicer output.
 const GEOMETRY_TOLERANCE_MM: f64 = 1e-3;
 
-/// Whether a squared distance `d2` is within a relative 1e-9 of `limit2` or past it: the
-/// exact test on the distance itself can only hold then (the squares' rounding is a few
-/// units in the last place).
-fn near_or_past(d2: f64, limit2: f64) -> bool {
-    d2 >= limit2 * (1.0 - 1e-9)
+/// The squared distance from which a squared distance is within a relative 1e-9 of
+/// `limit2` or past it: the exact test on the distance itself can only hold then (the
+/// squares' rounding is a few units in the last place).
+fn near_from(limit2: f64) -> f64 {
+    limit2 * (1.0 - 1e-9)
+}
+
+/// The vertical lines whose horizontal distance from a path [`MoveChecker::check_geometry`]
+/// screens: the bed's axis (the print radius), then each tower's pull point (the carriage
+/// speed ratio); each with the squared distance from which it takes the exact test
+/// ([`near_from`]).
+#[derive(Clone, Copy, Debug)]
+struct Screen {
+    x: [f64; 4],
+    y: [f64; 4],
+    near2: [f64; 4],
+}
+
+impl Screen {
+    fn new(machine: &Machine, model: &DeltaModel) -> Self {
+        let outside_mm = machine.geometry.print_radius_mm + GEOMETRY_TOLERANCE_MM;
+        let towers = model.towers_xy_mm();
+        let mut screen = Screen {
+            x: [0.0; 4],
+            y: [0.0; 4],
+            near2: [near_from(outside_mm * outside_mm); 4],
+        };
+        for (tower, xy) in towers.into_iter().enumerate() {
+            screen.x[tower + 1] = xy[0];
+            screen.y[tower + 1] = xy[1];
+            screen.near2[tower + 1] =
+                near_from(model.speed_ratio_dist2_mm2(tower, NEAR_SINGULAR_RATIO));
+        }
+        screen
+    }
 }
 
 /// A piece longer than this many sampling periods (2.8 h at 1 kHz) is not sampled: only its
@@ -63,6 +93,7 @@ pub struct MoveChecker<'m, O = ()> {
     run_floor: Option<RunFloor>,
     /// The arm tension above which a move is a violation (N; infinite without magnets).
     hold_n: f64,
+    screen: Screen,
 }
 
 impl<'m, O: Observer> MoveChecker<'m, O> {
@@ -73,9 +104,11 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
         };
         let sparse =
             response.is_some() && !observer.every_sample() && std::env::var_os(DENSE_ENV).is_none();
+        let model = machine.model();
         MoveChecker {
             machine,
-            model: machine.model(),
+            screen: Screen::new(machine, &model),
+            model,
             sparse,
             response,
             run_floor: (sparse && !observer.move_peaks()).then(RunFloor::default),
@@ -291,13 +324,29 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
     ///
     /// Each distance is compared squared first, and its square root, the carriage speed
     /// ratio's division, taken only near or past its limit: for nearly every move none of
-    /// seven square roots and three divisions (2 % of a default run's instructions).
+    /// seven square roots and three divisions (2 % of a default run's instructions). The
+    /// four squared distances are screened together, their thresholds computed once
+    /// ([`Screen`]), and the tests that flag anything taken out of line only when one of
+    /// them may.
     pub fn check_geometry(&self, path: &Path, checks: &mut PathChecks) {
+        let s = &self.screen;
+        let far2: [f64; 4] = std::array::from_fn(|k| path.max_dist2_from_mm2([s.x[k], s.y[k]]));
+        let near = (0..4).fold(false, |near, k| near | (far2[k] >= s.near2[k]));
+        let z_mm = path.min_z_mm();
+        if near || z_mm < -GEOMETRY_TOLERANCE_MM {
+            self.flag_geometry(far2, z_mm, checks);
+        }
+    }
+
+    /// The exact tests of [`Self::check_geometry`]: `far2` the path's squared distances
+    /// from the lines of the [`Screen`], `z_mm` its lowest point.
+    #[cold]
+    #[inline(never)]
+    fn flag_geometry(&self, far2: [f64; 4], z_mm: f64, checks: &mut PathChecks) {
         let limit_mm = self.machine.geometry.print_radius_mm;
-        let xy2 = path.max_xy2_mm2();
         let outside_mm = limit_mm + GEOMETRY_TOLERANCE_MM;
-        if near_or_past(xy2, outside_mm * outside_mm) {
-            let radius_mm = xy2.sqrt();
+        if far2[0] >= self.screen.near2[0] {
+            let radius_mm = far2[0].sqrt();
             if radius_mm > outside_mm {
                 checks.flag(Problem::OutsideRadius {
                     radius_mm,
@@ -305,14 +354,12 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
                 });
             }
         }
-        let z_mm = path.min_z_mm();
         if z_mm < -GEOMETRY_TOLERANCE_MM {
             checks.flag(Problem::BelowBed { z_mm });
         }
-        for (tower, xy) in self.model.towers_xy_mm().into_iter().enumerate() {
-            let d2 = path.max_dist2_from_mm2(xy);
-            let near_mm2 = self.model.speed_ratio_dist2_mm2(tower, NEAR_SINGULAR_RATIO);
-            if !near_or_past(d2, near_mm2) {
+        for tower in 0..3 {
+            let d2 = far2[tower + 1];
+            if d2 < self.screen.near2[tower + 1] {
                 continue;
             }
             let ratio = self.model.carriage_speed_ratio(tower, d2.sqrt());
