@@ -175,6 +175,7 @@ impl MoveLimits {
 
     /// delta.py `check_move`: Z moves scaled to max_z_velocity / max_z_accel; half, then a
     /// quarter, of the configured velocity and accel near the edge.
+    #[inline(always)] // see `QueuedMove`
     fn limit_delta(&self, m: &Move, q: &mut QueuedMove) {
         let dz = (m.path.end().z - m.path.start().z).abs();
         if dz > 0.0 {
@@ -199,6 +200,7 @@ impl MoveLimits {
 
     /// extruder.py `check_move`: a move with no XY motion, or a retract, is capped at the
     /// extrude-only limits divided by its |E|/length ratio.
+    #[inline(always)] // see `QueuedMove`
     fn limit_extruder(&self, m: &Move, q: &mut QueuedMove) {
         let no_xy = !q.kinematic || !m.path.moves_xy();
         if no_xy || q.e_ratio < 0.0 {

@@ -24,6 +24,12 @@ const BUFFER_TIME_HIGH_S: f64 = 1.0;
 pub(super) const DEFAULT_MAX_QUEUE: usize = 16_384;
 
 /// One move in the lookahead, with its limits.
+///
+/// A new move's limits are applied ([`Self::limit_speed`], `MoveLimits::limit_delta` and
+/// `limit_extruder`) and its junction found ([`Self::calc_junction`]) by functions inlined
+/// into the planner's step, so that it stays in registers until it is written into the
+/// queue: with any of them called, it was built on the stack and copied into the queue by a
+/// call to `memcpy` (0.6 % of an unshaped run's instructions, docs/performance.md).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct QueuedMove {
     line: u64,
@@ -85,6 +91,7 @@ impl QueuedMove {
     }
 
     /// toolhead.py `Move.limit_speed`.
+    #[inline(always)] // see `QueuedMove`
     pub(super) fn limit_speed(&mut self, speed_mm_s: f64, accel_mm_s2: f64) {
         let v2 = speed_mm_s * speed_mm_s;
         if v2 < self.max_cruise_v2 {
@@ -98,6 +105,7 @@ impl QueuedMove {
 
     /// toolhead.py `Move.calc_junction`. `icv` is the extruder's
     /// instantaneous_corner_velocity.
+    #[inline(always)] // see `QueuedMove`
     fn calc_junction(&mut self, prev: &QueuedMove, icv_mm_s: f64) {
         self.junction_cap_v2 = if self.kinematic && prev.kinematic {
             self.geometric_cap_v2(prev, icv_mm_s)
@@ -107,6 +115,7 @@ impl QueuedMove {
         self.chain(prev);
     }
 
+    #[inline(always)] // see `QueuedMove`
     fn geometric_cap_v2(&self, prev: &QueuedMove, icv_mm_s: f64) -> f64 {
         // extruder.py calc_junction: a change of extrusion ratio is an instantaneous
         // change of extruder speed, capped by instantaneous_corner_velocity.
