@@ -359,7 +359,11 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
         }
         for tower in 0..3 {
             let d2 = far2[tower + 1];
-            if d2 < self.screen.near2[tower + 1] {
+            // Not `d2 < …`: a NaN distance is skipped, as the screen skips it.
+            if d2
+                .partial_cmp(&self.screen.near2[tower + 1])
+                .is_none_or(std::cmp::Ordering::is_lt)
+            {
                 continue;
             }
             let ratio = self.model.carriage_speed_ratio(tower, d2.sqrt());
