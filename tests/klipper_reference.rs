@@ -36,8 +36,8 @@ impl Observer for Commanded {
         }
     }
 
-    fn merge(&self, acc: &mut Self::PerMove, later: Self::PerMove) {
-        acc.extend(later);
+    fn merge(&self, acc: &mut Self::PerMove, later: &mut Self::PerMove) {
+        acc.append(later);
     }
 }
 
@@ -87,7 +87,7 @@ fn compare(name: &str, shaped: bool) -> Fidelity {
         &gcode[..],
         &machine,
         Commanded,
-        |r| ours.extend(r.observed),
+        |r| ours.append(&mut r.observed),
         |_| {},
     )
     .expect("run");

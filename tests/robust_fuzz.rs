@@ -224,12 +224,12 @@ fn check_pipeline(data: &[u8], machine: &Machine, trace: bool) {
         data,
         machine,
         observer,
-        |r: MoveResult<Option<(Vec<u8>, _)>>| {
+        |r: &mut MoveResult<Option<(Vec<u8>, _)>>| {
             moves += 1;
             check_stats(&r.stats);
             report.add_move(&r.stats);
-            let rows = r.observed.map(|(rows, _)| rows).unwrap_or_default();
-            for row in String::from_utf8_lossy(&rows).lines() {
+            let rows = r.observed.as_ref().map_or(&[][..], |(rows, _)| rows);
+            for row in String::from_utf8_lossy(rows).lines() {
                 let fields: Vec<&str> = row.split(',').collect();
                 assert_eq!(fields.len(), columns, "{row}");
                 for f in fields {

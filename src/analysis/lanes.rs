@@ -101,7 +101,7 @@ pub(super) struct Lanes<'c, 'm, O: Observer, F, W> {
 impl<'c, 'm, O, F, W> Lanes<'c, 'm, O, F, W>
 where
     O: Observer,
-    F: FnMut(MoveResult<O::PerMove>) + Send,
+    F: FnMut(&mut MoveResult<O::PerMove>) + Send,
     W: Fn(&Job<O::PerMove>, usize) + Sync,
 {
     pub fn new(
@@ -308,8 +308,8 @@ where
     fn last_result(&self) {
         let mut model = self.model.lock().unwrap_or_else(PoisonError::into_inner);
         let Model { stage, on_move } = &mut *model;
-        if let Some(last) = stage.pending.take() {
-            on_move(last);
+        if let Some(mut last) = stage.pending.take() {
+            on_move(&mut last);
         }
         self.update(|state| {
             state.model_busy = false;
@@ -341,12 +341,12 @@ where
 /// Stops the other lanes when a lane panics: they would wait for it for ever.
 pub(super) struct FailGuard<'a, 'c, 'm, O: Observer, F, W>(&'a Lanes<'c, 'm, O, F, W>)
 where
-    F: FnMut(MoveResult<O::PerMove>) + Send,
+    F: FnMut(&mut MoveResult<O::PerMove>) + Send,
     W: Fn(&Job<O::PerMove>, usize) + Sync;
 
 impl<O: Observer, F, W> Drop for FailGuard<'_, '_, '_, O, F, W>
 where
-    F: FnMut(MoveResult<O::PerMove>) + Send,
+    F: FnMut(&mut MoveResult<O::PerMove>) + Send,
     W: Fn(&Job<O::PerMove>, usize) + Sync,
 {
     fn drop(&mut self) {
@@ -379,7 +379,7 @@ mod tests {
     fn results(gcode: &[u8], threads: usize, peaks_only: bool) -> Vec<(u64, MoveStats)> {
         let machine = kossel_machine();
         let mut out = Vec::new();
-        let on_move = |r: super::super::MoveResult<()>| out.push((r.group, r.stats));
+        let on_move = |r: &mut super::super::MoveResult<()>| out.push((r.group, r.stats.clone()));
         let totals = if peaks_only {
             run_on(
                 gcode,
@@ -461,7 +461,7 @@ mod tests {
                         to(e);
                     };
                     let mut moves = 0;
-                    let on_move = |_: super::super::MoveResult<()>| {
+                    let on_move = |_: &mut super::super::MoveResult<()>| {
                         moves += 1;
                         assert!(in_firmware || moves != 3000, "a bug in the model lane");
                     };

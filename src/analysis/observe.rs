@@ -59,8 +59,9 @@ pub trait Observer: Send + Sync {
     /// Takes a run of the move's evaluated samples (in time order, runs in time order).
     fn observe(&self, model: &DeltaModel, acc: &mut Self::PerMove, run: &Evaluated);
 
-    /// Appends what was kept of a later part of the same move.
-    fn merge(&self, acc: &mut Self::PerMove, later: Self::PerMove);
+    /// Appends what was kept of a later part of the same move, taking it out of `later`
+    /// (by reference: the pipeline hands each result on where it lies, not moved out).
+    fn merge(&self, acc: &mut Self::PerMove, later: &mut Self::PerMove);
 
     /// Whether the observer needs every sample (a trace, a plot window): then none is left
     /// uncomputed by a sparse evaluation, which only the verdict's peaks allow.
@@ -94,7 +95,7 @@ impl<O: Observer> Observer for RunPeaks<O> {
         self.0.observe(model, acc, run);
     }
 
-    fn merge(&self, acc: &mut Self::PerMove, later: Self::PerMove) {
+    fn merge(&self, acc: &mut Self::PerMove, later: &mut Self::PerMove) {
         self.0.merge(acc, later);
     }
 
@@ -116,7 +117,7 @@ impl Observer for () {
     #[inline(always)]
     fn observe(&self, _: &DeltaModel, _: &mut (), _: &Evaluated) {}
 
-    fn merge(&self, _: &mut (), _: ()) {}
+    fn merge(&self, _: &mut (), _: &mut ()) {}
 
     fn every_sample(&self) -> bool {
         false
@@ -136,9 +137,9 @@ impl<A: Observer, B: Observer> Observer for (A, B) {
         self.1.observe(model, &mut acc.1, run);
     }
 
-    fn merge(&self, acc: &mut Self::PerMove, later: Self::PerMove) {
-        self.0.merge(&mut acc.0, later.0);
-        self.1.merge(&mut acc.1, later.1);
+    fn merge(&self, acc: &mut Self::PerMove, later: &mut Self::PerMove) {
+        self.0.merge(&mut acc.0, &mut later.0);
+        self.1.merge(&mut acc.1, &mut later.1);
     }
 
     fn every_sample(&self) -> bool {
@@ -164,7 +165,7 @@ impl<A: Observer> Observer for Option<A> {
         }
     }
 
-    fn merge(&self, acc: &mut Self::PerMove, later: Self::PerMove) {
+    fn merge(&self, acc: &mut Self::PerMove, later: &mut Self::PerMove) {
         if let (Some(a), Some(acc), Some(later)) = (self, acc, later) {
             a.merge(acc, later);
         }
@@ -201,8 +202,8 @@ impl Observer for Window {
         }
     }
 
-    fn merge(&self, acc: &mut Self::PerMove, later: Self::PerMove) {
-        acc.extend(later);
+    fn merge(&self, acc: &mut Self::PerMove, later: &mut Self::PerMove) {
+        acc.append(later);
     }
 }
 
@@ -259,8 +260,8 @@ impl Observer for Verdict<'_> {
         }
     }
 
-    fn merge(&self, stats: &mut MoveStats, later: MoveStats) {
-        stats.merge(&later);
+    fn merge(&self, stats: &mut MoveStats, later: &mut MoveStats) {
+        stats.merge(later);
     }
 }
 

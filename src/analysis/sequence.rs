@@ -677,11 +677,13 @@ mod tests {
         for b in batches(&machine, &gcode, 7) {
             let mut out = Vec::new();
             checker.check_moves(&mut scratch, &b.pieces, &b.moves, &mut out);
-            for r in out {
+            for mut r in out {
                 match merged.last_mut() {
                     Some(last) if last.group == r.group => {
                         last.stats.merge(&r.stats);
-                        checker.observer().merge(&mut last.observed, r.observed);
+                        checker
+                            .observer()
+                            .merge(&mut last.observed, &mut r.observed);
                     }
                     _ => merged.push(r),
                 }

@@ -249,8 +249,8 @@ impl Observer for TraceRows<'_> {
         *rows = w.into_inner().unwrap_or_default();
     }
 
-    fn merge(&self, rows: &mut Vec<u8>, later: Vec<u8>) {
-        rows.extend(later);
+    fn merge(&self, rows: &mut Vec<u8>, later: &mut Vec<u8>) {
+        rows.append(later);
     }
 }
 

@@ -53,7 +53,7 @@ pub fn write_plots(
         machine,
         observer,
         |r| {
-            window.extend(r.observed);
+            window.append(&mut r.observed);
             let [x, y] = r.end_xy_mm;
             let use_ = r.stats.peak_n() / limit;
             let (i, j) = (((x + radius) / cell).floor(), ((y + radius) / cell).floor());
