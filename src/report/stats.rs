@@ -168,6 +168,8 @@ pub struct Worst {
 }
 
 impl Default for Worst {
+    /// Inlined, as [`MoveStats::new`].
+    #[inline(always)]
     fn default() -> Self {
         Worst {
             ratio: 0.0,
@@ -198,6 +200,9 @@ pub struct RunForces<'a> {
 pub const NEAR_SINGULAR_RATIO: f64 = 12.0;
 
 impl MoveStats {
+    /// A move's statistics before its first sample. Inlined: each move's result starts
+    /// from it, written in place (`MoveWork::stats`).
+    #[inline(always)]
     pub fn new(line: u64) -> Self {
         MoveStats {
             line,
