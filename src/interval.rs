@@ -22,12 +22,17 @@ impl Interval {
         }
     }
 
-    /// The smallest range holding both.
+    /// The smallest range holding both. The upper end is [`greater`] written as `o.hi <
+    /// self.hi`, the same comparison (NaN included): both ends then compare with one
+    /// predicate, and LLVM joins the boxes' packed [lo, hi] lanes with one `vcmpltpd` and
+    /// blends instead of a compare per predicate and a pack of the two masks (the
+    /// whole-move pass's join of each piece's box: −0.8 % of a default run's instructions,
+    /// −0.6 % of a shaped run's, docs/performance.md).
     #[inline(always)]
     pub fn join(self, o: Interval) -> Interval {
         Interval {
             lo: lesser(self.lo, o.lo),
-            hi: greater(self.hi, o.hi),
+            hi: if o.hi < self.hi { self.hi } else { o.hi },
         }
     }
 
