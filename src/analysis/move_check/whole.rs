@@ -287,8 +287,14 @@ impl<O: Observer> MoveChecker<'_, O> {
     /// hold), strictly, on every tower: then none of its samples could change the run's
     /// peaks or make a violation.
     fn below_run(&self, states: &StateBox, run: &Floor) -> bool {
+        let tension_n = std::array::from_fn(|i| lesser(run.tension_n[i], self.hold_n));
         self.model
-            .bound(&states.pos_mm, &states.vel_mm_s, &states.acc_mm_s2)
+            .bound_below(
+                &states.pos_mm,
+                &states.vel_mm_s,
+                &states.acc_mm_s2,
+                &tension_n,
+            )
             .is_some_and(|b| self.bounds_below_run(&b, run))
     }
 
