@@ -529,20 +529,35 @@ impl<O: Observer> SampleSink for MoveSink<'_, '_, O> {
     /// Against the run's peaks, each also below its violation (a share of 1, the magnets'
     /// hold): then none could have changed the run's peaks or made the move a violation.
     fn skip(&mut self, states: &StateBox, count: u64) -> bool {
-        let (Some(reference), Some(b)) = (
-            self.reference,
-            self.checker
-                .model
-                .bound(&states.pos_mm, &states.vel_mm_s, &states.acc_mm_s2),
-        ) else {
+        let Some(reference) = self.reference else {
             return false;
         };
         let checker = self.checker;
-        let below = match reference {
+        // The tension's limits before the bound, which stops at a tension above them
+        // (`DeltaModel::bound_below`); against the move's own peaks, once its samples so
+        // far are in them.
+        let tension_n = match reference {
             Reference::Move(floor) => {
                 if self.scratch.len > 0 {
-                    self.checker.flush(self.scratch, self.out);
+                    checker.flush(self.scratch, self.out);
                 }
+                let Some(stats) = self.out.get(self.slot).map(|r| &r.stats) else {
+                    return false;
+                };
+                std::array::from_fn(|i| greater(stats.peak_tension_n[i], floor.tension_n[i]))
+            }
+            Reference::Run(run) => checker.tension_limits(run),
+        };
+        let Some(b) = checker.model.bound_below(
+            &states.pos_mm,
+            &states.vel_mm_s,
+            &states.acc_mm_s2,
+            &tension_n,
+        ) else {
+            return false;
+        };
+        let below = match reference {
+            Reference::Move(floor) => {
                 let Some(stats) = self.out.get(self.slot).map(|r| &r.stats) else {
                     return false;
                 };

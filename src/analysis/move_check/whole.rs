@@ -287,23 +287,29 @@ impl<O: Observer> MoveChecker<'_, O> {
     /// hold), strictly, on every tower: then none of its samples could change the run's
     /// peaks or make a violation.
     fn below_run(&self, states: &StateBox, run: &Floor) -> bool {
-        let tension_n = std::array::from_fn(|i| lesser(run.tension_n[i], self.hold_n));
         self.model
             .bound_below(
                 &states.pos_mm,
                 &states.vel_mm_s,
                 &states.acc_mm_s2,
-                &tension_n,
+                &self.tension_limits(run),
             )
             .is_some_and(|b| self.bounds_below_run(&b, run))
     }
 
+    /// The tensions a bound must stay below on each tower to leave the run's peaks as they
+    /// are: the run's own, and the magnets' hold.
+    pub(super) fn tension_limits(&self, run: &Floor) -> [f64; 3] {
+        std::array::from_fn(|i| lesser(run.tension_n[i], self.hold_n))
+    }
+
     /// [`Self::below_run`] of the bounds over a box.
     pub(super) fn bounds_below_run(&self, b: &ForceBounds, run: &Floor) -> bool {
+        let tension = self.tension_limits(run);
         (0..3).all(|i| {
             b.force_n[i] < run.force_n[i]
                 && self.most_share(b, i) < lesser(run.share[i], 1.0)
-                && b.tension_n[i] < lesser(run.tension_n[i], self.hold_n)
+                && b.tension_n[i] < tension[i]
         })
     }
 
