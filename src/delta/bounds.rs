@@ -470,6 +470,48 @@ mod tests {
         assert!(some > 2_000 && none > 2_000, "{some} bounded, {none} not");
     }
 
+    /// The bound under tension limits is the bound itself when every tower's tension is
+    /// strictly below its limit, and None otherwise (a limit at a tower's own tension
+    /// bound, just above it, or +∞).
+    #[test]
+    fn a_bound_under_tension_limits_is_the_bound_or_none() {
+        let m = kossel();
+        let mut rng = Rng(17);
+        let mut some = 0;
+        for k in 0..5_000 {
+            let centre = [
+                Vec3::new(
+                    rng.range(-80.0, 80.0),
+                    rng.range(-80.0, 80.0),
+                    rng.range(0.0, 250.0),
+                ),
+                Vec3::new(rng.range(-300.0, 300.0), rng.range(-300.0, 300.0), 0.0),
+                Vec3::new(
+                    rng.range(-2e4, 2e4),
+                    rng.range(-2e4, 2e4),
+                    rng.range(-1e3, 1e3),
+                ),
+            ];
+            let ([p, v, a], _) = boxed(centre, [1e-3, 0.5, 5.0][k % 3], [[0.5; 3]; 3]);
+            let Some(b) = m.bound(&p, &v, &a) else {
+                assert_eq!(m.bound_below(&p, &v, &a, &[f64::INFINITY; 3]), None);
+                continue;
+            };
+            let tower = k % 3;
+            let mut limit = [f64::INFINITY; 3];
+            limit[tower] = b.tension_n[tower];
+            assert_eq!(m.bound_below(&p, &v, &a, &limit), None);
+            limit[tower] = b.tension_n[tower].next_up();
+            assert_eq!(m.bound_below(&p, &v, &a, &limit), Some(b));
+            let below = b.tension_n.map(|t| t + 1.0 + t.abs());
+            assert_eq!(m.bound_below(&p, &v, &a, &below), Some(b));
+            let under = b.tension_n.map(|t| t - 1.0 - t.abs());
+            assert_eq!(m.bound_below(&p, &v, &a, &under), None);
+            some += 1;
+        }
+        assert!(some > 1_000, "{some} bounded");
+    }
+
     #[test]
     fn a_small_box_is_bounded_tightly_and_an_unreachable_one_not_at_all() {
         let m = kossel();
