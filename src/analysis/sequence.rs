@@ -163,7 +163,7 @@ impl Sequencer {
             // SAFETY: the CPU has AVX2, checked just above.
             return unsafe { self.drive_avx2(commanded, batch_pieces, spare, on_batch) };
         }
-        self.drive_generic(commanded, batch_pieces, spare, on_batch)
+        self.drive_generic::<false>(commanded, batch_pieces, spare, on_batch)
     }
 
     /// [`Self::drive_generic`] compiled for AVX2: the drive's lag and the pieces' work
@@ -181,12 +181,13 @@ impl Sequencer {
         spare: &mut impl FnMut() -> Option<Batch>,
         on_batch: &mut impl FnMut(Batch),
     ) {
-        self.drive_generic(commanded, batch_pieces, spare, on_batch)
+        self.drive_generic::<true>(commanded, batch_pieces, spare, on_batch)
     }
 
-    /// [`Self::drive`] for any x86-64.
+    /// [`Self::drive`] for any x86-64 (`AVX2`: in code compiled for AVX2, the drive's
+    /// lag in AVX2 lanes, [`DriveStage::push`]).
     #[inline(always)]
-    fn drive_generic(
+    fn drive_generic<const AVX2: bool>(
         &mut self,
         commanded: &[Segment],
         batch_pieces: usize,
@@ -209,7 +210,7 @@ impl Sequencer {
                 .saturating_add(usize::from(!self.open));
             let (now, later) = rest.split_at(fill.clamp(1, rest.len()));
             for c in now {
-                self.piece(c);
+                self.piece::<AVX2>(c);
             }
             rest = later;
             if self.pending_pieces() >= batch_pieces {
@@ -225,8 +226,8 @@ impl Sequencer {
     /// Inlined into the drive stage's loop: a call per piece cost 2 % of that stage's
     /// instructions with a shaper.
     #[inline(always)]
-    fn piece(&mut self, c: &Segment) {
-        let step = self.drive.push(c);
+    fn piece<const AVX2: bool>(&mut self, c: &Segment) {
+        let step = self.drive.push::<AVX2>(c);
         // Whether the velocity jumps at the piece's start: the last piece's end sample and
         // this one's corner ask the same (a jump is zero where the motion is not continuous).
         let jumps = step.jump.norm() > JUMP_MIN_MM_S;
@@ -244,7 +245,7 @@ impl Sequencer {
             let seg = last.commanded;
             let (p, _) = seg.end();
             let settle = Segment::rest(seg.t1_s(), SETTLE_PERIODS * r.period_s(), p, seg.line);
-            self.piece(&settle);
+            self.piece::<false>(&settle);
         }
         self.close_last(None);
         self.merge_checked_into_open();
@@ -601,7 +602,7 @@ mod tests {
                         // SAFETY: the CPU has AVX2, checked above.
                         unsafe { sequencer.drive_avx2(step, batch_pieces, spare, &mut on_batch) };
                     } else {
-                        sequencer.drive_generic(step, batch_pieces, spare, &mut on_batch);
+                        sequencer.drive_generic::<false>(step, batch_pieces, spare, &mut on_batch);
                     }
                 }
                 sequencer.finish();
