@@ -21,6 +21,9 @@ use window::Window;
 /// A commanded piece no longer than this is left out, s: two breaks a rounding apart.
 const MIN_PIECE_S: f64 = 1e-12;
 
+/// [`Shaper::slack`] per second of the times' magnitude: 10⁻¹⁵ > 4 · 2⁻⁵³ (four roundings).
+const SLACK_PER_S: f64 = 1e-15;
+
 /// The commanded motion of a planned one, as a stream: planned pieces in, commanded pieces
 /// out as soon as no later planned piece can change them. The motion before the first and
 /// after the last planned piece is a rest where they start and end (Klipper's trapq).
@@ -43,12 +46,16 @@ pub struct Shaper {
     break_slots: usize,
     /// Each slot's offset, s.
     offsets: [f64; window::MAX_OFFSETS],
-    /// Each slot's last answer of [`Self::next_break`] (a planned break, or infinity for
-    /// none), still the answer while it lies beyond the time asked and, if it was no
-    /// planned start, no piece came since; −∞ when it must be asked again.
+    /// Each slot's last answer of [`Self::next_break`], less the slot's offset: the
+    /// commanded break b − τ of a planned break b (or infinity for none), still the answer
+    /// while b lies beyond the time asked and, if it was no planned start, no piece came
+    /// since; −∞ when it must be asked again.
     breaks: [f64; window::MAX_OFFSETS],
     /// Commanded motion is out up to here.
     t_out: f64,
+    /// The part of [`Self::slack`] that does not grow with time: twice the 1e-12 after
+    /// t + τ in [`Self::next_break`], and the roundings of magnitude |τ|.
+    slack_s: f64,
     /// No piece has come since the start or the last re-homing.
     fresh: bool,
     /// A new configuration, for the pieces after the next one.
@@ -86,6 +93,7 @@ impl Shaper {
             offsets,
             breaks: [f64::NEG_INFINITY; window::MAX_OFFSETS],
             t_out: f64::NEG_INFINITY,
+            slack_s: 2e-12 + SLACK_PER_S * (tau_hi - tau_lo),
             fresh: true,
             pending: None,
         }
@@ -200,9 +208,10 @@ impl Shaper {
     /// consecutive breaks.
     #[inline(always)]
     fn emit_until(&mut self, t_end: f64, out: &mut impl FnMut(Segment)) {
+        let slack = self.slack(t_end);
         while self.t_out < t_end {
             let ta = self.t_out;
-            let (next, runs_on) = self.next_break(ta);
+            let (next, runs_on) = self.next_break(ta, slack);
             let tb = lesser(next, t_end);
             if tb - ta > MIN_PIECE_S {
                 out(self.piece(ta, tb, runs_on));
@@ -228,21 +237,28 @@ impl Shaper {
     /// ([`PhaseChanges`], at most [`MAX_PHASE_CHANGES`]; their samples are taken as
     /// before). The flag returned tells whether it runs on through one (else it names
     /// none).
+    ///
+    /// A slot is asked again when its commanded break b − τ lies at or before t + `slack`
+    /// ([`Self::slack`]): whenever b lies at or before t + τ + 1e-12 as computed, and at
+    /// times also just after, where the question gives the same answer again (its cursor
+    /// stays on the start b). So the test needs neither the slot's offset nor an addition
+    /// of its own (−0.4 % of a shaped run's instructions, docs/performance.md).
     #[inline(always)]
-    fn next_break(&mut self, t: f64) -> (f64, bool) {
+    fn next_break(&mut self, t: f64, slack: f64) -> (f64, bool) {
         let mut best = f64::INFINITY;
         let n = self.break_slots;
         let (breaks, offsets) = (&mut self.breaks[..n], &self.offsets[..n]);
+        let due = t + slack;
         for slot in 1..n {
-            let tau = offsets[slot];
-            // Breaks of the planned motion after t + τ: the pieces' starts and the end.
-            let want = t + tau + 1e-12;
-            if breaks[slot] <= want {
+            if breaks[slot] <= due {
+                let tau = offsets[slot];
+                // Breaks of the planned motion after t + τ: the pieces' starts and the end.
+                let want = t + tau + 1e-12;
                 let i = self.planned.next_start(slot, want);
-                breaks[slot] = self.planned.start_or_end(i, want);
+                breaks[slot] = self.planned.start_or_end(i, want) - tau;
             }
             // Never NaN (a time, or ±∞ less a finite offset): a plain comparison.
-            best = lesser(best, breaks[slot] - tau);
+            best = lesser(best, breaks[slot]);
         }
         // The planned motion's own starts before the pulses' first break: asked each time,
         // as the starts passed count from `t`.
@@ -255,6 +271,15 @@ impl Shaper {
             }
         }
         (best, true)
+    }
+
+    /// How far after a time t between `t_out` and `t_end` a slot's commanded break b − τ
+    /// may lie when b lies at or before t + τ + 1e-12 (each as rounded): 1e-12 and four
+    /// roundings, each at most 2⁻⁵³ of |t| + |τ| (with |τ| at most the offsets' span),
+    /// with room to spare ([`SLACK_PER_S`]; the span's part is [`Self::slack_s`]).
+    #[inline(always)]
+    fn slack(&self, t_end: f64) -> f64 {
+        self.slack_s + SLACK_PER_S * (self.t_out.abs() + t_end.abs())
     }
 
     /// Whether the axes the shaper leaves as planned (Z, and X or Y if unshaped) run on
@@ -686,6 +711,48 @@ mod tests {
                 assert_eq!(run(true), baseline, "{x:?} {y:?}");
             }
         }
+    }
+
+    /// Whenever a planned break b lies at or before t + τ + 1e-12 as computed, so that
+    /// `next_break` must ask its slot again, b − τ lies at or before t + `slack` as
+    /// computed: over times from a millisecond to 10⁹ s, the offsets of a slow shaper
+    /// (seconds), and breaks a few ulps either side of the limit.
+    #[test]
+    fn the_slack_covers_every_break_to_ask_again() {
+        let mut s = Shaper::new(&both_axes(ShaperType::ThreeHumpEi, 0.7));
+        assert!(s.tau_hi - s.tau_lo > 2.0);
+        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
+        let mut asked = 0;
+        for _ in 0..200_000 {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            // Every other time just below a power of two, where t + τ rounds in the next
+            // binade's coarser steps; then with no time after it (the least slack).
+            let (t, t_end) = if seed.is_multiple_of(2) {
+                let t = 10f64.powf(-3.0 + 12.0 * (seed % 1_000_000) as f64 / 1e6);
+                (t, t * (1.0 + (seed >> 40) as f64 / (1u64 << 24) as f64))
+            } else {
+                let power = 2f64.powi((seed % 40) as i32 - 10);
+                let t = f64::from_bits(power.to_bits() - (seed >> 50) % 64 - 1);
+                (t, t)
+            };
+            s.t_out = t;
+            let slack = s.slack(t_end);
+            for at in [t, t_end] {
+                for &tau in &s.offsets[1..s.break_slots] {
+                    let want = at + tau + 1e-12;
+                    for ulps in -3..=3_i64 {
+                        let b = f64::from_bits(want.to_bits().wrapping_add_signed(ulps));
+                        if b <= want {
+                            asked += 1;
+                            assert!(b - tau <= at + slack, "{at} {tau} {b}");
+                        }
+                    }
+                }
+            }
+        }
+        assert!(asked > 1_000_000, "{asked}");
     }
 
     #[test]
