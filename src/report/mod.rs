@@ -221,7 +221,9 @@ impl Report {
     }
 
     /// Takes one move's statistics, in file order. A move out of reach adds no force: its
-    /// samples near the edge of the reach ask for forces that mean nothing.
+    /// samples near the edge of the reach ask for forces that mean nothing. Inlined into
+    /// the run's per-move callback, whose frame it then shares.
+    #[inline(always)]
     pub fn add_move(&mut self, m: &MoveStats) {
         let reachable = !m
             .checks
@@ -360,7 +362,7 @@ impl Report {
                     available_force_n: Some(m.worst.map(|w| w.available_n)),
                     tower: tower + 1,
                     t_s: w.t_s,
-                    phase: w.phase,
+                    phase: m.worst_phase[tower],
                     message: format!(
                         "OVER force: tower {} needs {:.1} N, its motor gives {:.1} N at {:.0} mm/s",
                         TOWER_NAMES[tower], w.force_n, w.available_n, w.speed_mm_s

@@ -81,6 +81,10 @@ pub struct MoveStats {
     /// Per tower, the instant its motor was asked the largest share of the force it can
     /// give at that carriage speed.
     pub worst: [Worst; 3],
+    /// The phase of each tower's [`Worst`] instant. Kept apart from it, beside
+    /// `peak_phase`: in each `Worst` it left 7 bytes of padding, which LLVM filled by
+    /// copying stack temporaries into every move's result as it was made.
+    pub worst_phase: [Phase; 3],
     /// Largest pull of each parallelogram on the platform (positive: tension), N, and when.
     pub peak_tension_n: [f64; 3],
     pub peak_tension_t_s: [f64; 3],
@@ -164,7 +168,6 @@ pub struct Worst {
     /// |q̇_i| then, mm/s.
     pub speed_mm_s: f64,
     pub t_s: f64,
-    pub phase: Phase,
 }
 
 impl Default for Worst {
@@ -177,7 +180,6 @@ impl Default for Worst {
             available_n: 0.0,
             speed_mm_s: 0.0,
             t_s: 0.0,
-            phase: Phase::Cruise,
         }
     }
 }
@@ -211,6 +213,7 @@ impl MoveStats {
             peak_t_s: [0.0; 3],
             peak_phase: [Phase::Cruise; 3],
             worst: [Worst::default(); 3],
+            worst_phase: [Phase::Cruise; 3],
             peak_tension_n: [0.0; 3],
             peak_tension_t_s: [0.0; 3],
             peak_speed_mm_s: 0.0,
@@ -262,8 +265,8 @@ impl MoveStats {
                     available_n: avail[ratio_at],
                     speed_mm_s: run.speed_mm_s[i][ratio_at].abs(),
                     t_s: t,
-                    phase: ph,
                 };
+                self.worst_phase[i] = ph;
             }
         }
     }
@@ -281,6 +284,7 @@ impl MoveStats {
             }
             if later.worst[i].ratio > self.worst[i].ratio {
                 self.worst[i] = later.worst[i];
+                self.worst_phase[i] = later.worst_phase[i];
             }
             if later.peak_tension_n[i] > self.peak_tension_n[i] {
                 self.peak_tension_n[i] = later.peak_tension_n[i];
@@ -426,8 +430,8 @@ mod tests {
                             available_n: a[i][k],
                             speed_mm_s: v[i][k].abs(),
                             t_s: t[k],
-                            phase: phase[k],
                         };
+                        scan.worst_phase[i] = phase[k];
                     }
                 }
             }

@@ -173,7 +173,7 @@ pub fn wanted(
         if w.available_n < plateau && needed < plateau && w.speed_mm_s > 0.0 {
             let s = speed_for_force(motors, needed, w.speed_mm_s);
             (Cause::Speed, w.ratio, s / w.speed_mm_s)
-        } else if w.phase == Phase::Corner
+        } else if m.worst_phase[tower] == Phase::Corner
             && rules
                 .jump_omega
                 .is_none_or(|om| ran.scv_mm_s * om >= ran.accel_mm_s2)
