@@ -169,30 +169,37 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
             observed: self.observer.start(m.line),
             end_xy_mm: m.end_xy_mm,
         }));
+        // A move's pieces are looked up only where it is sampled: most moves go whole.
+        let works = |m: &MoveWork| pieces.get(m.first..m.first + m.count).unwrap_or_default();
         for (idx, m) in moves.iter().enumerate() {
-            let works = pieces.get(m.first..m.first + m.count).unwrap_or_default();
-            let skipped = match &run {
+            let revisit_it = match &run {
                 // A line split between batches is joined after the checks: its parts
                 // could not be sampled again.
                 Some(run) if !m.split => match scratch.whole.get(idx) {
+                    // Nothing of it is sampled later: whether it is to be sampled again is
+                    // known now, and most such moves are not kept for it (−0.9 % of a
+                    // default run's instructions). Only a problem of its path flags it
+                    // ([`Self::flagged`]): its peaks stay zero, no violation (a magnets'
+                    // hold is positive).
                     Some(Some(w)) if w.let_go => {
+                        scratch.skipped += w.count;
                         if let Some(r) = out.get_mut(base + idx) {
                             r.stats.samples += w.count;
                         }
-                        scratch.skipped += w.count;
-                        true
+                        m.checks.problem.is_some()
                     }
                     _ => {
-                        self.sample_move(scratch, works, base + idx, out, Some(Reference::Run(run)))
+                        let reference = Some(Reference::Run(run));
+                        self.sample_move(scratch, works(m), base + idx, out, reference)
                     }
                 },
                 _ => {
-                    let floor = self.floor(works);
+                    let floor = self.floor(works(m));
                     let reference = floor.as_ref().map(Reference::Move);
-                    self.sample_move(scratch, works, base + idx, out, reference)
+                    self.sample_move(scratch, works(m), base + idx, out, reference)
                 }
             };
-            if skipped {
+            if revisit_it {
                 revisit.push(idx);
             }
         }
@@ -202,8 +209,7 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
             if self.flagged(&out[slot].stats) {
                 out[slot].stats = m.stats();
                 out[slot].observed = self.observer.start(m.line);
-                let works = pieces.get(m.first..m.first + m.count).unwrap_or_default();
-                self.sample_move(scratch, works, slot, out, None);
+                self.sample_move(scratch, works(m), slot, out, None);
                 self.flush(scratch, out);
                 // Sampled after all: its peaks raise the run's below.
                 if let Some(w) = scratch.whole.get_mut(idx).and_then(Option::as_mut) {
@@ -593,7 +599,8 @@ pub struct Scratch {
     cmd_pos_mm: [[f64; BLOCK]; 3],
     forces: ForceBlock,
     available_n: [[f64; BLOCK]; 3],
-    /// The moves of a call some of whose samples went uncomputed (indices in its moves).
+    /// The moves of a call some of whose samples went uncomputed and that may be sampled
+    /// again (indices in its moves): a move let go whole only when it is flagged.
     revisit: Vec<usize>,
     /// The moves of a call offered whole to the run's peaks, and which went
     /// ([`MoveChecker::let_go_whole`]); the indices of the offered ones.
