@@ -157,11 +157,12 @@ pub struct ParsedLine<'a> {
     /// `*` checksum as written, if any.
     pub checksum: Option<u32>,
     diags: ArrayVec<LineDiag, MAX_DIAGS>,
-    /// A bit per letter (A = bit 0) with a word kept, and the index of its last one in
-    /// `words`: [`Self::word`] without a search (the interpreter asks five letters of
-    /// every move). An index is meaningful only where its bit is set.
-    letters: u32,
-    last_index: [u8; 26],
+    /// Per letter (A first), 1 + the index in `words` of its last word kept, 0 without one:
+    /// [`Self::word`] without a search (the interpreter asks five letters of every move), by
+    /// one bounds check (0 wraps past the end), where a bit per letter and the index were
+    /// two tests for each letter asked and two updates for each word kept (−0.3 % of an
+    /// unshaped run's instructions).
+    slots: [u8; 26],
 }
 
 impl<'a> ParsedLine<'a> {
@@ -184,12 +185,8 @@ impl<'a> ParsedLine<'a> {
     /// The last word with this (upper-case) letter.
     #[inline]
     pub fn word(&self, letter: u8) -> Option<&Word> {
-        let i = usize::from(letter.wrapping_sub(b'A'));
-        if i < 26 && self.letters & (1 << i) != 0 {
-            self.words.get(usize::from(self.last_index[i]))
-        } else {
-            None
-        }
+        let slot = self.slots.get(usize::from(letter.wrapping_sub(b'A')))?;
+        self.words.get(usize::from(*slot).wrapping_sub(1))
     }
 
     /// The value of the last word with this letter, if it has one.
@@ -284,8 +281,7 @@ impl<'a> ParsedLine<'a> {
             comment: None,
             checksum: None,
             diags: ArrayVec::new_const(),
-            letters: 0,
-            last_index: [0; 26],
+            slots: [0; 26],
         }
     }
 
@@ -405,8 +401,8 @@ fn classic_words<'a>(p: &mut ParsedLine<'a>, args: &'a [u8]) {
                     }
                 };
                 // The letters kept so far: a word that is not kept ends the line's words.
-                let bit = 1u32 << (letter - b'A');
-                if p.letters & bit != 0 {
+                let slot = usize::from(letter - b'A');
+                if p.slots[slot] != 0 {
                     p.diag(col, Severity::Warning, DiagKind::DuplicateWord(letter));
                 }
                 let word = Word {
@@ -414,13 +410,11 @@ fn classic_words<'a>(p: &mut ParsedLine<'a>, args: &'a [u8]) {
                     value,
                     column: col,
                 };
-                let index = p.words.len() as u8;
                 if p.words.try_push(word).is_err() {
                     p.diag(col, Severity::Warning, DiagKind::TooManyWords);
                     return;
                 }
-                p.letters |= bit;
-                p.last_index[usize::from(letter - b'A')] = index;
+                p.slots[slot] = p.words.len() as u8;
             }
         }
     }

@@ -89,9 +89,8 @@ impl<'a> ParsedLine<'a> {
                 return self.decline();
             }
             let value = decimal(negative, digits, frac_count);
-            let bit = 1u32 << (letter - b'A');
-            let index = self.words.len();
-            if self.letters & bit != 0 || index == MAX_WORDS {
+            let slot = usize::from(letter - b'A');
+            if self.slots[slot] != 0 || self.words.len() == MAX_WORDS {
                 return self.decline();
             }
             self.words.push(Word {
@@ -99,8 +98,7 @@ impl<'a> ParsedLine<'a> {
                 value: Some(value),
                 column,
             });
-            self.letters |= bit;
-            self.last_index[usize::from(letter - b'A')] = index as u8;
+            self.slots[slot] = self.words.len() as u8;
             after_number = true;
         }
     }
@@ -110,7 +108,7 @@ impl<'a> ParsedLine<'a> {
     #[inline(never)]
     fn decline(&mut self) -> bool {
         self.words.clear();
-        self.letters = 0;
+        self.slots = [0; 26];
         self.command = Command::None;
         false
     }
