@@ -418,7 +418,7 @@ impl DriveStage {
             lag = r.lag_after::<AVX2>(&lag, seg.a, slot.1);
         }
         self.lag = lag;
-        self.prev_end = Some(seg.end());
+        self.prev_end = Some(seg.end_in::<AVX2>());
         DriveStep {
             lag: start,
             end: lag,
