@@ -396,6 +396,14 @@ impl DriveStage {
         // The lag in a local, written back once: updated in place, its three components
         // were stored in parts and loaded again across them, which the processor cannot
         // forward from its store buffer (a stall of a dozen cycles a piece).
+        let turn = self.response.as_ref().map(|r| {
+            let bits = seg.dt_s.to_bits();
+            let slot = &mut self.memo[memo_slot(bits)];
+            if slot.0 != bits {
+                *slot = (bits, r.turn(seg.dt_s));
+            }
+            slot.1
+        });
         let mut lag = self.lag;
         let (jump, continuous) = match self.prev_end {
             Some((p, v)) if (seg.p - p).norm() <= CONTINUITY_MM => (seg.v - v, true),
@@ -409,13 +417,8 @@ impl DriveStage {
             lag.de -= jump;
         }
         let start = lag;
-        if let Some(r) = &self.response {
-            let bits = seg.dt_s.to_bits();
-            let slot = &mut self.memo[memo_slot(bits)];
-            if slot.0 != bits {
-                *slot = (bits, r.turn(seg.dt_s));
-            }
-            lag = r.lag_after::<AVX2>(&lag, seg.a, slot.1);
+        if let (Some(r), Some(turn)) = (&self.response, turn) {
+            lag = r.lag_after::<AVX2>(&lag, seg.a, turn);
         }
         self.lag = lag;
         self.prev_end = Some(seg.end_in::<AVX2>());
