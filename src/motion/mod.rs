@@ -163,6 +163,17 @@ impl Segment {
     }
 }
 
+/// A vector in memory, its three axes in the lanes of an AVX2 register, the fourth zero:
+/// one masked load where setting the lanes took a load, a broadcast and two blends.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+#[inline]
+pub(crate) fn load_lanes(v: &Vec3) -> std::arch::x86_64::__m256d {
+    use std::arch::x86_64::*;
+    // SAFETY: the mask reads the vector's three doubles.
+    unsafe { _mm256_maskload_pd(v.as_ptr(), _mm256_set_epi64x(0, -1, -1, -1)) }
+}
+
 #[cfg(target_arch = "x86_64")]
 impl Segment {
     /// [`Self::end`] with the three axes in the lanes of one AVX2 register (the fourth
@@ -172,10 +183,11 @@ impl Segment {
     #[inline]
     fn end_avx2(&self) -> (Vec3, Vec3) {
         use std::arch::x86_64::*;
-        let three = _mm256_set_epi64x(0, -1, -1, -1);
-        // SAFETY: each mask reads a vector's three doubles.
-        let lanes = |v: &Vec3| unsafe { _mm256_maskload_pd(v.as_ptr(), three) };
-        let (p, v, a) = (lanes(&self.p), lanes(&self.v), lanes(&self.a));
+        let (p, v, a) = (
+            load_lanes(&self.p),
+            load_lanes(&self.v),
+            load_lanes(&self.a),
+        );
         let tau = self.dt_s;
         let (add, mul) = (_mm256_add_pd, _mm256_mul_pd);
         let p_end = add(
