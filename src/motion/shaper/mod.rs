@@ -328,15 +328,14 @@ impl Shaper {
             }
         }
         let none = (PhaseChanges::NONE, PhaseChanges::NO_PHASES);
-        let (line, phase, (changes, later_phases)) =
-            match own.and_then(|i| Some((i, planned.get(i)?))) {
-                Some((i, s)) if runs_on => (s.line, s.phase, planned.changes(i, tb)),
-                Some((_, s)) => (s.line, s.phase, none),
-                None => {
-                    let s = planned.front().or(planned.back());
-                    (s.map_or(0, |s| s.line), Phase::Rest, none)
-                }
-            };
+        let (line, phase, (changes, later_phases)) = match own {
+            Some((i, s)) if runs_on => (s.line, s.phase, planned.changes(i, tb)),
+            Some((_, s)) => (s.line, s.phase, none),
+            None => {
+                let s = planned.front().or(planned.back());
+                (s.map_or(0, |s| s.line), Phase::Rest, none)
+            }
+        };
         Segment {
             t0_s: ta,
             dt_s: tb - ta,
