@@ -375,10 +375,7 @@ impl Shaper {
     /// Drops the planned pieces no pulse will look at again.
     #[inline(always)]
     fn drop_unneeded(&mut self) {
-        let done_s = self.t_out + self.tau_lo;
-        while self.planned.len() > 1 && self.planned.front_end_s().is_some_and(|t| t < done_s) {
-            self.planned.pop_front();
-        }
+        self.planned.drop_ended_before(self.t_out + self.tau_lo);
     }
 }
 

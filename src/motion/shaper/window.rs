@@ -20,7 +20,6 @@ pub const MAX_OFFSETS: usize = 1 + 2 * MAX_PULSES;
 /// Planned pieces in time order, with a forward-only cursor per offset. An index it
 /// hands out is into its pieces, valid until the next [`Self::pop_front`] or
 /// [`Self::clear`].
-#[derive(Default)]
 pub struct Window {
     /// The pieces from `head` on; those before it are dropped, and removed from the vector
     /// a batch at a time ([`Self::pop_front`]): indexing stays a plain slice lookup, where a
@@ -33,8 +32,25 @@ pub struct Window {
     /// planned (`Shaper::runs_on`): its start breaks no commanded axis.
     runs_on: Vec<bool>,
     head: usize,
+    /// The first piece's end while a later piece is pushed, else +∞: the shaper's drop
+    /// test at each commanded piece is one comparison, not a count, a lookup and its
+    /// check (−0.9 % of a shaped run's instructions).
+    droppable_before_s: f64,
     /// Per offset: the first piece that started after the last `next_start` question.
     starts: [usize; MAX_OFFSETS],
+}
+
+impl Default for Window {
+    fn default() -> Window {
+        Window {
+            pieces: Vec::new(),
+            times: Vec::new(),
+            runs_on: Vec::new(),
+            head: 0,
+            droppable_before_s: f64::INFINITY,
+            starts: [0; MAX_OFFSETS],
+        }
+    }
 }
 
 impl Window {
@@ -43,6 +59,9 @@ impl Window {
         self.times.push([seg.t0_s, seg.t1_s()]);
         self.runs_on.push(runs_on);
         self.pieces.push(seg);
+        if self.len() == 2 {
+            self.droppable_before_s = self.times[self.head][1];
+        }
     }
 
     /// Whether the piece at `i` runs on from the one before (None past the last).
@@ -94,12 +113,6 @@ impl Window {
         self.live().first()
     }
 
-    /// The first piece's end, s (from the times, not the piece).
-    #[inline(always)]
-    pub fn front_end_s(&self) -> Option<f64> {
-        self.times.get(self.head).map(|t| t[1])
-    }
-
     pub fn back(&self) -> Option<&Segment> {
         self.live().last()
     }
@@ -108,9 +121,21 @@ impl Window {
         self.pieces.len() - self.head
     }
 
-    pub fn pop_front(&mut self) {
+    /// Drops the first pieces while they end before `t` and a later one follows.
+    #[inline(always)]
+    pub fn drop_ended_before(&mut self, t: f64) {
+        while self.droppable_before_s < t {
+            self.pop_front();
+        }
+    }
+
+    fn pop_front(&mut self) {
         if self.head < self.pieces.len() {
             self.head += 1;
+            self.droppable_before_s = match self.len() {
+                2.. => self.times[self.head][1],
+                _ => f64::INFINITY,
+            };
             // The dropped pieces go once they are as many as the live ones: each piece is
             // moved at most once on average.
             if self.head >= COMPACT_MIN && self.head >= self.len() {
@@ -140,6 +165,7 @@ impl Window {
         self.times.clear();
         self.runs_on.clear();
         self.head = 0;
+        self.droppable_before_s = f64::INFINITY;
         self.starts = [0; MAX_OFFSETS];
     }
 
