@@ -189,6 +189,7 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
                         m.checks.problem.is_some()
                     }
                     _ => {
+                        scratch.raise.push(idx);
                         let reference = Some(Reference::Run(run));
                         self.sample_move(scratch, works(m), base + idx, out, reference)
                     }
@@ -211,9 +212,9 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
                 out[slot].observed = self.observer.start(m.line);
                 self.sample_move(scratch, works(m), slot, out, None);
                 self.flush(scratch, out);
-                // Sampled after all: its peaks raise the run's below.
-                if let Some(w) = scratch.whole.get_mut(idx).and_then(Option::as_mut) {
-                    w.let_go = false;
+                // Let go whole but sampled after all: its peaks raise the run's below.
+                if !m.split && matches!(scratch.whole.get(idx), Some(Some(w)) if w.let_go) {
+                    scratch.raise.push(idx);
                 }
             }
         }
@@ -228,15 +229,14 @@ impl<'m, O: Observer> MoveChecker<'m, O> {
         if let Some(floor) = &self.run_floor {
             // A move let go whole has no peaks to raise the run's with, only its count: not
             // offered to the floor (most moves go so; −0.5 % of a default run's
-            // instructions).
-            let went = |idx: usize| matches!(scratch.whole.get(idx), Some(Some(w)) if w.let_go);
-            let moves = moves.iter().zip(&out[base..]).enumerate();
-            for (idx, (m, r)) in moves {
-                if !m.split && !went(idx) {
-                    floor.raise(&r.stats);
-                }
+            // instructions). The others listed as they are sampled, so that the moves let
+            // go are not visited again (−0.24 % of a default run's instructions, −0.13 % shaped). The floor
+            // keeps maxima: the order it is raised in does not matter.
+            for &idx in &scratch.raise {
+                floor.raise(&out[base + idx].stats);
             }
         }
+        scratch.raise.clear();
     }
 
     /// Samples one move's pieces into the blocks (its result is `out[slot]`), a sparse
@@ -606,6 +606,9 @@ pub struct Scratch {
     /// ([`MoveChecker::let_go_whole`]); the indices of the offered ones.
     whole: Vec<Option<WholeMove>>,
     offered: Vec<usize>,
+    /// The moves of a call whose peaks raise the run's ([`RunFloor`]), indices in its
+    /// moves: those sampled, not let go whole.
+    raise: Vec<usize>,
     /// Samples left uncomputed in the call so far, for [`MoveChecker::skipped_samples`].
     skipped: u64,
 }
@@ -624,6 +627,7 @@ impl Default for Scratch {
             revisit: Vec::new(),
             whole: Vec::new(),
             offered: Vec::new(),
+            raise: Vec::new(),
             skipped: 0,
         }
     }

@@ -225,11 +225,19 @@ impl Report {
     /// the run's per-move callback, whose frame it then shares.
     #[inline(always)]
     pub fn add_move(&mut self, m: &MoveStats) {
-        let reachable = !m
-            .checks
-            .problem
-            .as_deref()
-            .is_some_and(Problem::unreachable);
+        if self.add_peaks(m) {
+            self.add_rest(m);
+        }
+    }
+
+    /// The part of [`Self::add_move`] every move needs: its count, samples and peaks.
+    /// Returns whether the move has more to report ([`Self::add_rest`]): its entry in the
+    /// list of moves, a flag. Nearly no move has, so the per-move callback's common path
+    /// makes no call and saves no register: its frame saved all six callee-saved registers
+    /// for the rare paths (−0.28 % of a default run's instructions, −0.13 % shaped).
+    #[inline(always)]
+    pub fn add_peaks(&mut self, m: &MoveStats) -> bool {
+        let reachable = m.reachable();
         let s = &mut self.summary;
         s.moves += 1;
         s.samples += m.samples;
@@ -245,19 +253,31 @@ impl Report {
                 s.peak_use_line[i] = m.line;
             }
         }
+        self.moves.is_some() || self.has_flags(m)
+    }
+
+    /// Whether a move may have something to flag ([`Self::add_flags`]).
+    #[inline(always)]
+    fn has_flags(&self, m: &MoveStats) -> bool {
+        let checks = &m.checks;
+        checks.problem.is_some()
+            || checks.near_singular.is_some()
+            || m.over_force()
+            || self.arm_magnet_hold_n.is_some()
+    }
+
+    /// What [`Self::add_peaks`] left of a move: its entry in the list of moves, its flags.
+    #[cold]
+    #[inline(never)]
+    pub fn add_rest(&mut self, m: &MoveStats) {
+        let reachable = m.reachable();
         if let Some(moves) = &mut self.moves {
             moves.push(MoveEntry {
                 line: m.line,
                 peak_force_n: reachable.then_some(m.peak_force_n),
             });
         }
-        // Nearly every move has nothing to report: what it might have, out of line.
-        let checks = &m.checks;
-        if checks.problem.is_some()
-            || checks.near_singular.is_some()
-            || m.over_force()
-            || self.arm_magnet_hold_n.is_some()
-        {
+        if self.has_flags(m) {
             self.add_flags(m, reachable);
         }
     }

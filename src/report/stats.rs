@@ -306,6 +306,16 @@ impl MoveStats {
         }
     }
 
+    /// Whether the move stays within reach: a move out of reach adds no force to a run's
+    /// peaks ([`crate::report::Report::add_move`]).
+    pub fn reachable(&self) -> bool {
+        !self
+            .checks
+            .problem
+            .as_deref()
+            .is_some_and(Problem::unreachable)
+    }
+
     /// Whether some motor was asked more than it can give.
     pub fn over_force(&self) -> bool {
         self.worst.iter().any(|w| w.ratio > 1.0)
