@@ -7,8 +7,10 @@ use std::collections::VecDeque;
 
 use crate::gcode::Move;
 use crate::machine::Machine;
+#[cfg(target_arch = "x86_64")]
+use crate::motion::Avx2Axes;
 use crate::motion::drive::{Drive, DriveStage, DriveStep, Response};
-use crate::motion::{JUMP_MIN_MM_S, Segment};
+use crate::motion::{Axes, JUMP_MIN_MM_S, Segment};
 use crate::path::Vec3;
 use crate::report::{MoveStats, PathChecks};
 use crate::resample::{Edge, Kicks, PieceWork};
@@ -163,7 +165,7 @@ impl Sequencer {
             // SAFETY: the CPU has AVX2, checked just above.
             return unsafe { self.drive_avx2(commanded, batch_pieces, spare, on_batch) };
         }
-        self.drive_generic::<false>(commanded, batch_pieces, spare, on_batch)
+        self.drive_generic::<Vec3>(commanded, batch_pieces, spare, on_batch)
     }
 
     /// [`Self::drive_generic`] compiled for AVX2: the drive's lag and the pieces' work
@@ -181,13 +183,13 @@ impl Sequencer {
         spare: &mut impl FnMut() -> Option<Batch>,
         on_batch: &mut impl FnMut(Batch),
     ) {
-        self.drive_generic::<true>(commanded, batch_pieces, spare, on_batch)
+        self.drive_generic::<Avx2Axes>(commanded, batch_pieces, spare, on_batch)
     }
 
-    /// [`Self::drive`] for any x86-64 (`AVX2`: in code compiled for AVX2, the drive's
-    /// lag in AVX2 lanes, [`DriveStage::push`]).
+    /// [`Self::drive`] for any x86-64, in axes `A` (in code compiled for AVX2, the drive's
+    /// vectors in AVX2 lanes, [`DriveStage::push`]).
     #[inline(always)]
-    fn drive_generic<const AVX2: bool>(
+    fn drive_generic<A: Axes>(
         &mut self,
         commanded: &[Segment],
         batch_pieces: usize,
@@ -210,7 +212,7 @@ impl Sequencer {
                 .saturating_add(usize::from(!self.open));
             let (now, later) = rest.split_at(fill.clamp(1, rest.len()));
             for c in now {
-                self.piece::<AVX2>(c);
+                self.piece::<A>(c);
             }
             rest = later;
             if self.pending_pieces() >= batch_pieces {
@@ -226,8 +228,8 @@ impl Sequencer {
     /// Inlined into the drive stage's loop: a call per piece cost 2 % of that stage's
     /// instructions with a shaper.
     #[inline(always)]
-    fn piece<const AVX2: bool>(&mut self, c: &Segment) {
-        let step = self.drive.push::<AVX2>(c);
+    fn piece<A: Axes>(&mut self, c: &Segment) {
+        let step = self.drive.push::<A>(c);
         // Whether the velocity jumps at the piece's start: the last piece's end sample and
         // this one's corner ask the same (a jump is zero where the motion is not continuous).
         let jumps = step.jump.norm() > JUMP_MIN_MM_S;
@@ -245,7 +247,7 @@ impl Sequencer {
             let seg = last.commanded;
             let (p, _) = seg.end();
             let settle = Segment::rest(seg.t1_s(), SETTLE_PERIODS * r.period_s(), p, seg.line);
-            self.piece::<false>(&settle);
+            self.piece::<Vec3>(&settle);
         }
         self.close_last(None);
         self.merge_checked_into_open();
@@ -602,7 +604,7 @@ mod tests {
                         // SAFETY: the CPU has AVX2, checked above.
                         unsafe { sequencer.drive_avx2(step, batch_pieces, spare, &mut on_batch) };
                     } else {
-                        sequencer.drive_generic::<false>(step, batch_pieces, spare, &mut on_batch);
+                        sequencer.drive_generic::<Vec3>(step, batch_pieces, spare, &mut on_batch);
                     }
                 }
                 sequencer.finish();

@@ -15,7 +15,7 @@ mod turn;
 
 pub(crate) use turn::ROUND;
 
-use super::{CONTINUITY_MM, Segment};
+use super::{Axes, CONTINUITY_MM, Lanes, Segment};
 use crate::path::Vec3;
 use swing::Windows;
 
@@ -112,7 +112,8 @@ impl Response {
     /// at its beginning.
     #[inline(always)]
     pub fn lag_at(&self, start: &Lag, a_c: Vec3, tau_s: f64) -> Lag {
-        self.lag_after::<false>(start, a_c, self.turn(tau_s))
+        let (e, de) = self.lag_after(start.e, start.de, a_c, self.turn(tau_s));
+        Lag { e, de }
     }
 
     /// What [`Self::lag_at`] needs of τ: sin and cos of ω_dτ (by [`turn::sin_cos`]),
@@ -127,17 +128,13 @@ impl Response {
         }
     }
 
-    /// [`Self::lag_at`] for the τ of `turn`. With `AVX2` (only in code compiled for AVX2,
-    /// which runs only on a CPU with it), the three axes in one register
-    /// ([`Self::lag_after_avx2`]).
+    /// [`Self::lag_at`] for the τ of `turn`, from the lag (`e`, `de`), in axes `A`
+    /// ([`Axes`]): with AVX2 the three axes in one register, the same operations on each
+    /// in the same order, so the same bits (test
+    /// `the_stage_gives_the_closed_form_bit_for_bit_through_its_memo`; −0.3 % / −0.75 % of
+    /// a run's instructions without and with a shaper, docs/performance.md).
     #[inline(always)]
-    fn lag_after<const AVX2: bool>(&self, start: &Lag, a_c: Vec3, turn: Turn) -> Lag {
-        #[cfg(target_arch = "x86_64")]
-        if AVX2 {
-            // SAFETY: `AVX2` is set only in code compiled for AVX2, chosen at run time on a
-            // CPU that has it.
-            return unsafe { self.lag_after_avx2(start, a_c, turn) };
-        }
+    fn lag_after<A: Axes>(&self, e: A, de: A, a_c: A, turn: Turn) -> (A, A) {
         let Turn {
             sin: s,
             cos: c,
@@ -145,12 +142,12 @@ impl Response {
         } = turn;
         // u = e − e_p with e_p = −a_c/ω², the lag the constant acceleration settles to.
         let e_p = a_c * self.to_e;
-        let u0 = start.e - e_p;
-        let du0 = start.de;
+        let u0 = e - e_p;
+        let du0 = de;
         let inv_wd = self.inv_wd;
         let u = (u0 * c + (du0 + u0 * self.sigma) * (s * inv_wd)) * decay;
         let du = (du0 * c - (du0 * self.sigma + u0 * self.omega2) * (s * inv_wd)) * decay;
-        Lag { e: e_p + u, de: du }
+        (e_p + u, du)
     }
 
     /// The lag at `t0_s + tau0_s`, `t0_s + tau0_s + h_s`, … into a commanded piece of
@@ -207,49 +204,6 @@ impl Response {
     #[inline(always)]
     pub fn acceleration(&self, lag: &Lag) -> Vec3 {
         lag.e * (-self.omega2) - lag.de * (2.0 * self.sigma)
-    }
-}
-
-#[cfg(target_arch = "x86_64")]
-impl Response {
-    /// [`Self::lag_after`] with the three axes in the lanes of one AVX2 register (the
-    /// fourth zero), where a `Vec3`'s arithmetic takes two instructions (a pair and a
-    /// scalar): the same operations on each axis in the same order, so the same bits (test
-    /// `the_stage_gives_the_closed_form_bit_for_bit_through_its_memo`). −0.3 % / −0.75 % of
-    /// a run's instructions without and with a shaper (docs/performance.md).
-    #[target_feature(enable = "avx2")]
-    #[inline]
-    fn lag_after_avx2(&self, start: &Lag, a_c: Vec3, turn: Turn) -> Lag {
-        use std::arch::x86_64::*;
-        // The lag's vectors, in registers, lane by lane (loaded from memory, they were
-        // spilled first: +1.3 % of a run's instructions); the piece's acceleration loaded
-        // (−0.2 % / −0.3 % without and with a shaper, docs/performance.md).
-        let lanes = |v: &Vec3| _mm256_set_pd(0.0, v[2], v[1], v[0]);
-        let k = |x: f64| _mm256_set1_pd(x);
-        let (add, sub, mul) = (_mm256_add_pd, _mm256_sub_pd, _mm256_mul_pd);
-        let (c, s_wd, decay) = (k(turn.cos), k(turn.sin * self.inv_wd), k(turn.decay));
-        let (sigma, omega2) = (k(self.sigma), k(self.omega2));
-        let e_p = mul(crate::motion::load_lanes(&a_c), k(self.to_e));
-        let u0 = sub(lanes(&start.e), e_p);
-        let du0 = lanes(&start.de);
-        let u = mul(add(mul(u0, c), mul(add(du0, mul(u0, sigma)), s_wd)), decay);
-        let du = mul(
-            sub(
-                mul(du0, c),
-                mul(add(mul(du0, sigma), mul(u0, omega2)), s_wd),
-            ),
-            decay,
-        );
-        let mut out = [0.0; 8];
-        // SAFETY: four doubles, then four, into an array of eight.
-        unsafe {
-            _mm256_storeu_pd(out.as_mut_ptr(), add(e_p, u));
-            _mm256_storeu_pd(out.as_mut_ptr().add(4), du);
-        }
-        Lag {
-            e: Vec3::new(out[0], out[1], out[2]),
-            de: Vec3::new(out[4], out[5], out[6]),
-        }
     }
 }
 
@@ -351,9 +305,11 @@ fn memo_slot(bits: u64) -> usize {
 #[derive(Clone, Debug)]
 pub struct DriveStage {
     response: Option<Response>,
-    lag: Lag,
-    /// The previous piece's commanded end position and velocity.
-    prev_end: Option<(Vec3, Vec3)>,
+    /// The lag, e and ė, in lanes: with AVX2 one load and one store each a piece (as
+    /// `Vec3`s, their axes were set in lanes, taken out and stored one by one).
+    lag: [Lanes; 2],
+    /// The previous piece's commanded end position and velocity, likewise.
+    prev_end: Option<[Lanes; 2]>,
     /// [`Response::turn`] of recent pieces' durations, by the duration's bits (a slot
     /// holds a duration and its turn, so what it gives is what the turn computes). Of a
     /// fixed size, so that a slot's index needs no bounds check; unused with the rigid model.
@@ -382,7 +338,7 @@ impl DriveStage {
         };
         DriveStage {
             response,
-            lag: Lag::default(),
+            lag: Default::default(),
             prev_end: None,
             memo,
         }
@@ -391,14 +347,11 @@ impl DriveStage {
     /// The lags at the start and end of the next commanded piece. A piece that does not
     /// start where the previous ended (a re-homing) starts from rest on the command.
     ///
-    /// Inlined into the sequencer: its result is then built where it is used. With `AVX2`
-    /// (only in code compiled for AVX2, which runs only on a CPU with it), the lag's turn
-    /// in AVX2 lanes ([`Response::lag_after_avx2`]).
+    /// Inlined into the sequencer: its result is then built where it is used. In axes `A`
+    /// ([`Axes`]): with AVX2 the continuity test, the jump and the lag's turn on whole
+    /// registers.
     #[inline(always)]
-    pub fn push<const AVX2: bool>(&mut self, seg: &Segment) -> DriveStep {
-        // The lag in a local, written back once: updated in place, its three components
-        // were stored in parts and loaded again across them, which the processor cannot
-        // forward from its store buffer (a stall of a dozen cycles a piece).
+    pub(crate) fn push<A: Axes>(&mut self, seg: &Segment) -> DriveStep {
         // The turn's memo first: a miss calls exp, and no vector of the piece is live across
         // that call yet (spilled and loaded again, −0.27 % of a default run's instructions).
         let turn = self.response.as_ref().map(|r| {
@@ -409,28 +362,44 @@ impl DriveStage {
             }
             slot.1
         });
-        let mut lag = self.lag;
-        let (jump, continuous) = match self.prev_end {
-            Some((p, v)) if (seg.p - p).norm() <= CONTINUITY_MM => (seg.v - v, true),
-            Some(_) => {
-                lag = Lag::default();
-                (Vec3::zeros(), false)
+        // The lag in locals, written back once: updated in place, its three components
+        // were stored in parts and loaded again across them, which the processor cannot
+        // forward from its store buffer (a stall of a dozen cycles a piece).
+        let (mut e, mut de) = (A::get(&self.lag[0]), A::get(&self.lag[1]));
+        let v = A::load(&seg.v);
+        let (jump, continuous) = match &self.prev_end {
+            Some([p, pv]) if (A::load(&seg.p) - A::get(p)).norm() <= CONTINUITY_MM => {
+                (v - A::get(pv), true)
             }
-            None => (seg.v, true),
+            Some(_) => {
+                (e, de) = (A::zero(), A::zero());
+                (A::zero(), false)
+            }
+            None => (v, true),
         };
         if self.response.is_some() {
-            lag.de -= jump;
+            de = de - jump;
         }
-        let start = lag;
+        let start = Lag {
+            e: e.vec3(),
+            de: de.vec3(),
+        };
         if let (Some(r), Some(turn)) = (&self.response, turn) {
-            lag = r.lag_after::<AVX2>(&lag, seg.a, turn);
+            (e, de) = r.lag_after(e, de, A::load(&seg.a), turn);
         }
-        self.lag = lag;
-        self.prev_end = Some(seg.end_in::<AVX2>());
+        e.put(&mut self.lag[0]);
+        de.put(&mut self.lag[1]);
+        let (p_end, v_end) = seg.end_in::<A>();
+        let prev = self.prev_end.insert(Default::default());
+        p_end.put(&mut prev[0]);
+        v_end.put(&mut prev[1]);
         DriveStep {
             lag: start,
-            end: lag,
-            jump,
+            end: Lag {
+                e: e.vec3(),
+                de: de.vec3(),
+            },
+            jump: jump.vec3(),
             continuous,
         }
     }
@@ -476,6 +445,13 @@ mod tests {
         }
     }
 
+    /// [`DriveStage::push`] in AVX2 lanes, compiled for AVX2 (as the sequencer's is).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    fn push_avx2(stage: &mut DriveStage, seg: &Segment) -> DriveStep {
+        stage.push::<crate::motion::Avx2Axes>(seg)
+    }
+
     fn piece(t0: f64, dt: f64, p: f64, v: f64, a: f64) -> Segment {
         let x = |s: f64| Vec3::new(s, 0.0, 0.0);
         Segment {
@@ -517,10 +493,11 @@ mod tests {
             };
             let a = if k % 2 == 0 { 3000.0 } else { -2000.0 };
             let s = piece(t, dt, p, 0.0, a);
-            let got = stage.push::<false>(&s);
+            let got = stage.push::<Vec3>(&s);
             assert_eq!(got.lag, expected, "piece {k}");
             if avx2 {
-                let step = lanes.push::<true>(&s);
+                // SAFETY: the CPU has AVX2, checked above.
+                let step = unsafe { push_avx2(&mut lanes, &s) };
                 assert_eq!(bits(&step.end), bits(&got.end), "piece {k}");
             }
             expected = r.lag_at(&got.lag, s.a, dt);
@@ -544,7 +521,7 @@ mod tests {
             piece(0.04, 0.06, 1.5, 0.0, 0.0),
         ];
         let mut stage = DriveStage::new(&Drive::Spring(spring));
-        let actual: Vec<DriveStep> = pieces.iter().map(|s| stage.push::<false>(s)).collect();
+        let actual: Vec<DriveStep> = pieces.iter().map(|s| stage.push::<Vec3>(s)).collect();
         let r = Response::new(&spring);
         let on_piece = |t: f64| pieces.iter().rposition(|s| s.t0_s <= t).unwrap_or(0);
         let closed = |t: f64| {
@@ -683,16 +660,16 @@ mod tests {
     #[test]
     fn a_rigid_drive_has_no_lag_and_a_rehoming_resets_it() {
         let mut rigid = DriveStage::new(&Drive::Rigid);
-        let a = rigid.push::<false>(&piece(0.0, 0.01, 0.0, 10.0, 0.0));
+        let a = rigid.push::<Vec3>(&piece(0.0, 0.01, 0.0, 10.0, 0.0));
         assert_eq!(a.lag, Lag::default());
         assert_eq!(a.jump, Vec3::new(10.0, 0.0, 0.0));
         let mut spring = DriveStage::new(&Drive::Spring(Spring {
             frequency_hz: 50.0,
             damping_ratio: 0.1,
         }));
-        spring.push::<false>(&piece(0.0, 0.01, 0.0, 10.0, 0.0));
+        spring.push::<Vec3>(&piece(0.0, 0.01, 0.0, 10.0, 0.0));
         // 0.1 mm further than the first piece ends: a re-homing, from rest on the command.
-        let b = spring.push::<false>(&piece(0.01, 0.01, 0.2, 0.0, 0.0));
+        let b = spring.push::<Vec3>(&piece(0.01, 0.01, 0.2, 0.0, 0.0));
         assert_eq!(b.lag, Lag::default());
         assert_eq!(b.jump, Vec3::zeros());
     }

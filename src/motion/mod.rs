@@ -15,6 +15,8 @@ pub mod drive;
 pub mod planned;
 pub mod shaper;
 
+use std::ops::{Add, Mul, Sub};
+
 use crate::path::Vec3;
 
 /// Where in its move a moment of the motion lies.
@@ -145,66 +147,142 @@ impl Segment {
 
     /// Position and velocity at the end (the left limit at t0 + dt).
     pub fn end(&self) -> (Vec3, Vec3) {
-        self.end_in::<false>()
-    }
-
-    /// [`Self::end`]; with `AVX2` (only in code compiled for AVX2, which runs only on a CPU
-    /// with it), the three axes in one register ([`Self::end_avx2`]).
-    #[inline(always)]
-    pub fn end_in<const AVX2: bool>(&self) -> (Vec3, Vec3) {
-        #[cfg(target_arch = "x86_64")]
-        if AVX2 {
-            // SAFETY: `AVX2` is set only in code compiled for AVX2, chosen at run time on a
-            // CPU that has it.
-            return unsafe { self.end_avx2() };
-        }
-        let (p, v, _) = self.at(self.dt_s);
+        let (p, v) = self.end_in::<Vec3>();
         (p, v)
     }
-}
 
-/// A vector in memory, its three axes in the lanes of an AVX2 register, the fourth zero:
-/// one masked load where setting the lanes took a load, a broadcast and two blends.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-#[inline]
-pub(crate) fn load_lanes(v: &Vec3) -> std::arch::x86_64::__m256d {
-    use std::arch::x86_64::*;
-    // SAFETY: the mask reads the vector's three doubles.
-    unsafe { _mm256_maskload_pd(v.as_ptr(), _mm256_set_epi64x(0, -1, -1, -1)) }
-}
-
-#[cfg(target_arch = "x86_64")]
-impl Segment {
-    /// [`Self::end`] with the three axes in the lanes of one AVX2 register (the fourth
-    /// zero): the same operations on each axis in the same order as [`Self::at`], so the
-    /// same bits.
-    #[target_feature(enable = "avx2")]
-    #[inline]
-    fn end_avx2(&self) -> (Vec3, Vec3) {
-        use std::arch::x86_64::*;
-        let (p, v, a) = (
-            load_lanes(&self.p),
-            load_lanes(&self.v),
-            load_lanes(&self.a),
-        );
+    /// [`Self::end`] in axes `A` (the operations of [`Self::at`] in the same order, so
+    /// the same bits in either).
+    #[inline(always)]
+    pub(crate) fn end_in<A: Axes>(&self) -> (A, A) {
+        let (p, v, a) = (A::load(&self.p), A::load(&self.v), A::load(&self.a));
         let tau = self.dt_s;
-        let (add, mul) = (_mm256_add_pd, _mm256_mul_pd);
-        let p_end = add(
-            add(p, mul(v, _mm256_set1_pd(tau))),
-            mul(a, _mm256_set1_pd(0.5 * tau * tau)),
-        );
-        let v_end = add(v, mul(a, _mm256_set1_pd(tau)));
-        let mut out = [0.0; 8];
-        // SAFETY: four doubles, then four, into an array of eight.
-        unsafe {
-            _mm256_storeu_pd(out.as_mut_ptr(), p_end);
-            _mm256_storeu_pd(out.as_mut_ptr().add(4), v_end);
+        (p + v * tau + a * (0.5 * tau * tau), v + a * tau)
+    }
+}
+
+/// A vector's three axes and a zero fourth, aligned: one AVX2 load or store
+/// ([`Axes::get`], [`Axes::put`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[repr(C, align(32))]
+pub(crate) struct Lanes([f64; 4]);
+
+/// Three-axis vectors in registers, for code written once for a [`Vec3`] and for the lanes
+/// of an AVX2 register ([`Avx2Axes`], in code compiled for AVX2): the drive stage keeps
+/// its lag and the previous piece's end in [`Lanes`], so that with AVX2 its continuity
+/// test, the velocity jump and the lag's turn work on whole registers.
+pub(crate) trait Axes:
+    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<f64, Output = Self>
+{
+    /// A vector in memory.
+    fn load(v: &Vec3) -> Self;
+    fn get(l: &Lanes) -> Self;
+    fn put(self, l: &mut Lanes);
+    fn vec3(self) -> Vec3;
+    fn zero() -> Self;
+    /// The Euclidean norm, as nalgebra's: √((x² + y²) + z²).
+    fn norm(self) -> f64;
+}
+
+impl Axes for Vec3 {
+    #[inline(always)]
+    fn load(v: &Vec3) -> Self {
+        *v
+    }
+    #[inline(always)]
+    fn get(l: &Lanes) -> Self {
+        Vec3::new(l.0[0], l.0[1], l.0[2])
+    }
+    #[inline(always)]
+    fn put(self, l: &mut Lanes) {
+        l.0[..3].copy_from_slice(self.as_slice());
+    }
+    #[inline(always)]
+    fn vec3(self) -> Vec3 {
+        self
+    }
+    #[inline(always)]
+    fn zero() -> Self {
+        Vec3::zeros()
+    }
+    #[inline(always)]
+    fn norm(self) -> f64 {
+        Vec3::norm(&self)
+    }
+}
+
+/// The three axes in the lanes of an AVX2 register, the fourth zero: a `Vec3`'s
+/// arithmetic takes two instructions (a pair and a scalar), this one. Only in code
+/// compiled for AVX2, which runs only on a CPU with it (its operations are inlined there).
+#[cfg(target_arch = "x86_64")]
+#[derive(Clone, Copy)]
+pub(crate) struct Avx2Axes(std::arch::x86_64::__m256d);
+
+#[cfg(target_arch = "x86_64")]
+mod avx2_axes {
+    use super::{Avx2Axes, Axes, Lanes, Vec3};
+    use std::arch::x86_64::*;
+    use std::ops::{Add, Mul, Sub};
+
+    // SAFETY (each `unsafe` below): an `Avx2Axes` is used only in code compiled for AVX2,
+    // chosen at run time on a CPU that has it; the loads and stores stay in their vectors.
+    impl Add for Avx2Axes {
+        type Output = Self;
+        #[inline(always)]
+        fn add(self, o: Self) -> Self {
+            Avx2Axes(unsafe { _mm256_add_pd(self.0, o.0) })
         }
-        (
-            Vec3::new(out[0], out[1], out[2]),
-            Vec3::new(out[4], out[5], out[6]),
-        )
+    }
+
+    impl Sub for Avx2Axes {
+        type Output = Self;
+        #[inline(always)]
+        fn sub(self, o: Self) -> Self {
+            Avx2Axes(unsafe { _mm256_sub_pd(self.0, o.0) })
+        }
+    }
+
+    impl Mul<f64> for Avx2Axes {
+        type Output = Self;
+        #[inline(always)]
+        fn mul(self, k: f64) -> Self {
+            Avx2Axes(unsafe { _mm256_mul_pd(self.0, _mm256_set1_pd(k)) })
+        }
+    }
+
+    impl Axes for Avx2Axes {
+        /// One masked load where setting the lanes took a load, a broadcast and two blends.
+        #[inline(always)]
+        fn load(v: &Vec3) -> Self {
+            Avx2Axes(unsafe { _mm256_maskload_pd(v.as_ptr(), _mm256_set_epi64x(0, -1, -1, -1)) })
+        }
+        #[inline(always)]
+        fn get(l: &Lanes) -> Self {
+            Avx2Axes(unsafe { _mm256_load_pd(l.0.as_ptr()) })
+        }
+        #[inline(always)]
+        fn put(self, l: &mut Lanes) {
+            unsafe { _mm256_store_pd(l.0.as_mut_ptr(), self.0) }
+        }
+        #[inline(always)]
+        fn vec3(self) -> Vec3 {
+            let mut l = Lanes::default();
+            self.put(&mut l);
+            <Vec3 as Axes>::get(&l)
+        }
+        #[inline(always)]
+        fn zero() -> Self {
+            Avx2Axes(unsafe { _mm256_setzero_pd() })
+        }
+        #[inline(always)]
+        fn norm(self) -> f64 {
+            unsafe {
+                let sq = _mm256_mul_pd(self.0, self.0);
+                let xy = _mm256_castpd256_pd128(sq);
+                let xy = _mm_add_sd(xy, _mm_unpackhi_pd(xy, xy));
+                _mm_cvtsd_f64(_mm_add_sd(xy, _mm256_extractf128_pd(sq, 1))).sqrt()
+            }
+        }
     }
 }
 

@@ -137,7 +137,7 @@ fn with_a_drive_a_sample_is_the_command_plus_the_lag() {
         Vec3::new(50.0, 0.0, 0.0),
         Vec3::zeros(),
     );
-    let piece = drive.push::<false>(&a);
+    let piece = drive.push::<Vec3>(&a);
     let w = PieceWork::new(a, &piece, 0.5 / 45.0);
     for s in samples(&w, Some(&r)) {
         let lag = r.lag_at(&piece.lag, a.a, s.t_s);
