@@ -6,6 +6,8 @@
 use super::{Lag, Response};
 use crate::interval::{Interval, greater, lesser};
 use crate::path::Vec3;
+#[cfg(target_arch = "x86_64")]
+use crate::motion::{Avx2Axes, Axes};
 
 /// The first half damped period of a piece, π/ω_d, is cut into this many windows; the
 /// rest of a longer piece gets the ringing's envelope from there on. Instructions of
@@ -243,9 +245,7 @@ impl Response {
         // A vector's three axes in one masked load, the fourth lane zero: building the lanes
         // from the axes took four instructions each, six vectors a piece (−0.75 % of a default
         // run's instructions).
-        let three = _mm256_set_epi64x(0, -1, -1, -1);
-        // SAFETY: the mask reads the three doubles of the vector, no more.
-        let lanes = |v: &Vec3| unsafe { _mm256_maskload_pd(v.as_ptr(), three) };
+        let lanes = |v: &Vec3| Avx2Axes::load(v).0;
         let k = |x: f64| _mm256_set1_pd(x);
         let (add, sub, mul) = (_mm256_add_pd, _mm256_sub_pd, _mm256_mul_pd);
         // −x, exactly: the sign bit flipped.
