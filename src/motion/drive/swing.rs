@@ -5,9 +5,9 @@
 
 use super::{Lag, Response};
 use crate::interval::{Interval, greater, lesser};
-use crate::path::Vec3;
 #[cfg(target_arch = "x86_64")]
 use crate::motion::{Avx2Axes, Axes};
+use crate::path::Vec3;
 
 /// The first half damped period of a piece, π/ω_d, is cut into this many windows; the
 /// rest of a longer piece gets the ringing's envelope from there on. Instructions of
